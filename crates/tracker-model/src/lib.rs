@@ -1,0 +1,51 @@
+//! # tracker-model
+//!
+//! The shared vocabulary of the tracking toolkit; every algorithm crate speaks it and nothing
+//! here touches files, the clock or the terminal.
+//!
+//! * [`Gaussian`] states, [`TransitionModel`] / [`ObservationModel`] traits whose default
+//!   methods give prediction and the Joseph-form Kalman update, [`filter`] over a sequence with
+//!   missing measurements and the Rauch-Tung-Striebel [`smooth`]er.
+//! * Models: [`ConstantVelocity2`] (white-acceleration or the MCMCDA paper's G-matrix noise,
+//!   exact over a gap of k scans), [`RandomWalk`], [`LinearTransition`], [`LinearObservation`]
+//!   with position-only and full-state shortcuts.
+//! * Geometry: [`Region`] (with its volume V), [`BoundingBox`] with IoU, [`bearing_rad`].
+//! * [`LikelihoodGrid`]: normalisation, weighted-sum and product fusion, peak extraction.
+//! * [`Scan`]s of [`Measurement`]s with their hidden [`Origin`], and the [`Track`] /
+//!   [`TrackSet`] output type that every tracker returns and every metric reads.
+//! * The MCMCDA scenario [`SimulationConfig`] → [`Simulator`] (Oh, Russell & Sastry, TAC 2009).
+//! * MOTChallenge rows: [`parse_mot`], [`format_mot`], conversions to and from [`TrackSet`].
+//!
+//! Invariants: a [`Gaussian`] always has a finite mean and a symmetric positive-definite
+//! covariance; a failed factorisation is an [`Error`], never a panic; randomness comes only from
+//! the generator the caller passes in.
+
+mod error;
+mod gaussian;
+mod geometry;
+mod grid;
+mod kalman;
+mod models;
+mod mot;
+mod simulate;
+mod track;
+
+#[cfg(test)]
+mod tests;
+
+pub use error::{Error, Result};
+pub use gaussian::{
+    Gaussian, LN_2PI, check_finite_matrix, check_positive_semidefinite, check_symmetric,
+    cholesky_checked,
+};
+pub use geometry::{BoundingBox, Point2, Region, Region2, bearing_rad, wrap_angle_rad};
+pub use grid::{LikelihoodGrid, Peak, PeakConfig};
+pub use kalman::{FilterRun, FilterStep, filter, smooth};
+pub use models::{
+    ConstantVelocity2, CvNoise, CvState, FullStateMeasurement, Innovation, LinearObservation,
+    LinearTransition, ObservationModel, PositionMeasurement2, RandomWalk, TransitionModel, Updated,
+    full_state_measurement, position_measurement,
+};
+pub use mot::{MotRow, format_mot, parse_mot};
+pub use simulate::{Simulation, SimulationConfig, Simulator};
+pub use track::{Frame, Location, Measurement, Origin, Scan, Track, TrackId, TrackPoint, TrackSet};
