@@ -1,6 +1,6 @@
 //! Gaussian states and the matrix checks every covariance goes through.
 
-use nalgebra::{Cholesky, SMatrix, SVector};
+use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -75,13 +75,13 @@ impl<const N: usize> Gaussian<N> {
     /// normalised estimation error squared (NEES).
     pub fn mahalanobis_sq(&self, x: &SVector<f64, N>) -> Result<f64> {
         let chol = cholesky_checked(&self.covariance, "state covariance")?;
-        Ok(mahalanobis_sq_with(&chol, &(x - self.mean)))
+        Ok(chol.mahalanobis_sq(&(x - self.mean)))
     }
 
     /// Log-density at `x`.
     pub fn log_pdf(&self, x: &SVector<f64, N>) -> Result<f64> {
         let chol = cholesky_checked(&self.covariance, "state covariance")?;
-        Ok(log_normal_with(&chol, &(x - self.mean)))
+        Ok(chol.log_normal(&(x - self.mean)))
     }
 }
 
@@ -110,14 +110,131 @@ pub fn check_symmetric<const N: usize>(m: &SMatrix<f64, N, N>, what: &'static st
     Ok(())
 }
 
-/// Cholesky factor of a symmetric positive-definite matrix, or an error naming it.
+/// Cholesky factor of a symmetric positive-definite matrix, after checking that it is finite
+/// and symmetric; an error naming the matrix otherwise.
 pub fn cholesky_checked<const N: usize>(
     m: &SMatrix<f64, N, N>,
     what: &'static str,
-) -> Result<Cholesky<f64, nalgebra::Const<N>>> {
+) -> Result<CholeskyFactor<N>> {
     check_finite_matrix(m, what)?;
     check_symmetric(m, what)?;
-    Cholesky::new(*m).ok_or(Error::NotPositiveDefinite { what })
+    CholeskyFactor::new(m, what)
+}
+
+/// The lower-triangular Cholesky factor L (L Lᵀ = A) of a small symmetric positive-definite
+/// matrix.
+///
+/// nalgebra's general factorisation and triangular solves loop over dynamic column views; for
+/// the 2×2 to 6×6 covariances of tracking, these fixed-size loops unroll completely and make
+/// the whole filter-smoother several times faster (see docs/benchmarks.md).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CholeskyFactor<const N: usize> {
+    /// Row-major L; plain arrays let the compiler drop bounds checks and unroll.
+    l: [[f64; N]; N],
+    /// 1 / Lᵢᵢ, so the substitutions multiply instead of divide.
+    inv_diag: [f64; N],
+}
+
+#[expect(
+    clippy::needless_range_loop,
+    reason = "index loops mirror the textbook substitution formulas"
+)]
+impl<const N: usize> CholeskyFactor<N> {
+    /// Factorises `a`, reading only its lower triangle; a non-positive (or NaN) pivot is a
+    /// [`Error::NotPositiveDefinite`] naming `what`.
+    pub fn new(a: &SMatrix<f64, N, N>, what: &'static str) -> Result<Self> {
+        let mut l = [[0.0; N]; N];
+        let mut inv_diag = [0.0; N];
+        for j in 0..N {
+            let mut d = a[(j, j)];
+            for k in 0..j {
+                d -= l[j][k] * l[j][k];
+            }
+            if d.is_nan() || d <= 0.0 {
+                return Err(Error::NotPositiveDefinite { what });
+            }
+            let ljj = d.sqrt();
+            l[j][j] = ljj;
+            inv_diag[j] = 1.0 / ljj;
+            for i in (j + 1)..N {
+                let mut s = a[(i, j)];
+                for k in 0..j {
+                    s -= l[i][k] * l[j][k];
+                }
+                l[i][j] = s * inv_diag[j];
+            }
+        }
+        Ok(Self { l, inv_diag })
+    }
+
+    /// L.
+    pub fn l(&self) -> SMatrix<f64, N, N> {
+        SMatrix::from_fn(|i, j| self.l[i][j])
+    }
+
+    /// Solves L Y = B. Rows are processed in order and every right-hand side at once, so the
+    /// innermost loop runs over the columns of B and vectorises.
+    pub fn solve_lower<const C: usize>(&self, b: &SMatrix<f64, N, C>) -> SMatrix<f64, N, C> {
+        let mut y = [[0.0; C]; N];
+        for i in 0..N {
+            let mut row = [0.0; C];
+            for (c, v) in row.iter_mut().enumerate() {
+                *v = b[(i, c)];
+            }
+            for k in 0..i {
+                let lik = self.l[i][k];
+                for c in 0..C {
+                    row[c] -= lik * y[k][c];
+                }
+            }
+            for c in 0..C {
+                y[i][c] = row[c] * self.inv_diag[i];
+            }
+        }
+        SMatrix::from_fn(|i, c| y[i][c])
+    }
+
+    /// Solves A X = B (forward substitution with L, then back substitution with Lᵀ).
+    pub fn solve<const C: usize>(&self, b: &SMatrix<f64, N, C>) -> SMatrix<f64, N, C> {
+        let y = self.solve_lower(b);
+        let mut x = [[0.0; C]; N];
+        for i in (0..N).rev() {
+            let mut row = [0.0; C];
+            for (c, v) in row.iter_mut().enumerate() {
+                *v = y[(i, c)];
+            }
+            for k in (i + 1)..N {
+                let lki = self.l[k][i];
+                for c in 0..C {
+                    row[c] -= lki * x[k][c];
+                }
+            }
+            for c in 0..C {
+                x[i][c] = row[c] * self.inv_diag[i];
+            }
+        }
+        SMatrix::from_fn(|i, c| x[i][c])
+    }
+
+    /// ½ log det A = Σ log Lᵢᵢ.
+    pub fn half_log_det(&self) -> f64 {
+        (0..N).map(|i| self.l[i][i].ln()).sum()
+    }
+
+    /// rᵀ A⁻¹ r.
+    pub fn mahalanobis_sq(&self, r: &SVector<f64, N>) -> f64 {
+        self.solve_lower(r).norm_squared()
+    }
+
+    /// log N(r; 0, A).
+    pub fn log_normal(&self, r: &SVector<f64, N>) -> f64 {
+        self.log_normal_given(self.mahalanobis_sq(r))
+    }
+
+    /// log N(r; 0, A) from an already computed rᵀ A⁻¹ r.
+    pub fn log_normal_given(&self, mahalanobis_sq: f64) -> f64 {
+        -0.5 * (mahalanobis_sq + N as f64 * LN_2PI) - self.half_log_det()
+    }
 }
 
 /// Checks that a matrix is symmetric positive semi-definite, to rounding level (process noise may be singular,
@@ -132,36 +249,10 @@ pub fn check_positive_semidefinite<const N: usize>(
     // negative eigenvalue is below rounding level, which we accept as zero).
     let ridge = 1e-12 * m.amax().max(f64::MIN_POSITIVE);
     let shifted = m + SMatrix::<f64, N, N>::identity() * ridge;
-    if Cholesky::new(shifted).is_some() {
-        Ok(())
-    } else {
-        Err(Error::NotPositiveDefinite { what })
-    }
+    CholeskyFactor::new(&shifted, what).map(|_| ())
 }
 
 /// (Pᵀ + P)/2: removes the asymmetry that rounding adds in covariance products.
 pub(crate) fn symmetrise<const N: usize>(m: &SMatrix<f64, N, N>) -> SMatrix<f64, N, N> {
     (m + m.transpose()) * 0.5
-}
-
-/// r ᵀ S⁻¹ r given the Cholesky factor of S.
-pub(crate) fn mahalanobis_sq_with<const N: usize>(
-    chol: &Cholesky<f64, nalgebra::Const<N>>,
-    r: &SVector<f64, N>,
-) -> f64 {
-    // Solve L y = r; then rᵀ S⁻¹ r = yᵀ y.
-    let y = chol
-        .l_dirty()
-        .solve_lower_triangular(r)
-        .unwrap_or_else(|| SVector::repeat(f64::INFINITY));
-    y.norm_squared()
-}
-
-/// log N(r; 0, S) given the Cholesky factor of S.
-pub(crate) fn log_normal_with<const N: usize>(
-    chol: &Cholesky<f64, nalgebra::Const<N>>,
-    r: &SVector<f64, N>,
-) -> f64 {
-    let half_log_det: f64 = chol.l_dirty().diagonal().iter().map(|d| d.ln()).sum();
-    -0.5 * (mahalanobis_sq_with(chol, r) + N as f64 * LN_2PI) - half_log_det
 }

@@ -117,7 +117,12 @@ pub struct BoundingBox {
 impl BoundingBox {
     /// A box with finite coordinates and non-negative size.
     pub fn new(left: f64, top: f64, width: f64, height: f64) -> Result<Self> {
-        for (v, what) in [(left, "box left"), (top, "box top"), (width, "box width"), (height, "box height")] {
+        for (v, what) in [
+            (left, "box left"),
+            (top, "box top"),
+            (width, "box width"),
+            (height, "box height"),
+        ] {
             if !v.is_finite() {
                 return Err(Error::NonFinite { what });
             }
@@ -138,7 +143,12 @@ impl BoundingBox {
 
     /// A box of the given size centred on `centre`.
     pub fn from_centre(centre: Point2, width: f64, height: f64) -> Result<Self> {
-        Self::new(centre.x - width / 2.0, centre.y - height / 2.0, width, height)
+        Self::new(
+            centre.x - width / 2.0,
+            centre.y - height / 2.0,
+            width,
+            height,
+        )
     }
 
     /// The centre point.

@@ -54,12 +54,13 @@ impl LikelihoodGrid {
         let extent = region.extent();
         let n_cols = (extent.x / cell_size).ceil() as usize;
         let n_rows = (extent.y / cell_size).ceil() as usize;
-        let n_cells = n_cols.checked_mul(n_rows).filter(|&n| n <= 100_000_000).ok_or(
-            Error::InvalidParameter {
+        let n_cells = n_cols
+            .checked_mul(n_rows)
+            .filter(|&n| n <= 100_000_000)
+            .ok_or(Error::InvalidParameter {
                 name: "cell_size",
                 reason: format!("{cell_size} gives more than 1e8 cells"),
-            },
-        )?;
+            })?;
         Ok(Self {
             region,
             cell_size,
@@ -70,7 +71,11 @@ impl LikelihoodGrid {
     }
 
     /// A grid whose cell values are `f(cell centre)`; every value must be finite and ≥ 0.
-    pub fn from_fn(region: Region2, cell_size: f64, mut f: impl FnMut(Point2) -> f64) -> Result<Self> {
+    pub fn from_fn(
+        region: Region2,
+        cell_size: f64,
+        mut f: impl FnMut(Point2) -> f64,
+    ) -> Result<Self> {
         let mut grid = Self::zeros(region, cell_size)?;
         for row in 0..grid.n_rows {
             for col in 0..grid.n_cols {
@@ -179,10 +184,20 @@ impl LikelihoodGrid {
         for (out, cell) in fused.values.iter_mut().zip(0..) {
             *out = grids
                 .iter()
-                .map(|(g, w)| if *w == 0.0 { 0.0 } else { w * g.values[cell].ln() })
+                .map(|(g, w)| {
+                    if *w == 0.0 {
+                        0.0
+                    } else {
+                        w * g.values[cell].ln()
+                    }
+                })
                 .sum();
         }
-        let max = fused.values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let max = fused
+            .values
+            .iter()
+            .copied()
+            .fold(f64::NEG_INFINITY, f64::max);
         if max == f64::NEG_INFINITY {
             return Err(Error::InvalidParameter {
                 name: "likelihood grid",
@@ -198,12 +213,13 @@ impl LikelihoodGrid {
     /// of that shape.
     fn fusion_base(grids: &[(&Self, f64)]) -> Result<Self> {
         let Some((first, _)) = grids.first() else {
-            return Err(Error::Empty { what: "grids to fuse" });
+            return Err(Error::Empty {
+                what: "grids to fuse",
+            });
         };
         let mut weight_sum = 0.0;
         for (idx, (grid, weight)) in grids.iter().enumerate() {
-            if grid.region != first.region
-                || grid.cell_size.to_bits() != first.cell_size.to_bits()
+            if grid.region != first.region || grid.cell_size.to_bits() != first.cell_size.to_bits()
             {
                 return Err(Error::ShapeMismatch(format!(
                     "grid {idx} does not cover the same region with the same cells as grid 0"
@@ -269,7 +285,10 @@ impl LikelihoodGrid {
         let r2 = config.suppression_radius * config.suppression_radius;
         let mut kept: Vec<Peak> = Vec::new();
         for c in candidates {
-            if kept.iter().all(|k| (k.position - c.position).norm_squared() > r2) {
+            if kept
+                .iter()
+                .all(|k| (k.position - c.position).norm_squared() > r2)
+            {
                 kept.push(c);
             }
         }

@@ -5,7 +5,7 @@ use nalgebra::SVector;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::gaussian::{Gaussian, cholesky_checked, symmetrise};
+use crate::gaussian::{CholeskyFactor, Gaussian, symmetrise};
 use crate::models::{ObservationModel, TransitionModel};
 
 /// One time step of a filter run.
@@ -66,13 +66,11 @@ where
     T: TransitionModel<N> + ?Sized,
     O: ObservationModel<N, M> + ?Sized,
 {
-    let mut steps = Vec::with_capacity(measurements.len());
-    let mut current = prior.clone();
-    for (idx, z) in measurements.iter().enumerate() {
-        let predicted = if idx == 0 {
-            current
-        } else {
-            transition.predict(&current)
+    let mut steps: Vec<FilterStep<N>> = Vec::with_capacity(measurements.len());
+    for z in measurements {
+        let predicted = match steps.last() {
+            None => prior.clone(),
+            Some(previous) => transition.predict(&previous.filtered),
         };
         let step = match z {
             Some(z) => {
@@ -91,7 +89,6 @@ where
                 innovation_mahalanobis_sq: None,
             },
         };
-        current = step.filtered.clone();
         steps.push(step);
     }
     Ok(FilterRun { steps })
@@ -112,7 +109,7 @@ where
     for k in (0..run.steps.len() - 1).rev() {
         let filtered = &run.steps[k].filtered;
         let next_pred = &run.steps[k + 1].predicted;
-        let chol = cholesky_checked(next_pred.covariance(), "predicted covariance")?;
+        let chol = CholeskyFactor::new(next_pred.covariance(), "predicted covariance")?;
         // Cᵀ = (P⁻_{k+1})⁻¹ F P_k, using the symmetry of both covariances.
         let gain = chol.solve(&(f * filtered.covariance())).transpose();
         let next = &out[k + 1];

@@ -5,7 +5,8 @@
 //!
 //! * [`Gaussian`] states, [`TransitionModel`] / [`ObservationModel`] traits whose default
 //!   methods give prediction and the Joseph-form Kalman update, [`filter`] over a sequence with
-//!   missing measurements and the Rauch-Tung-Striebel [`smooth`]er.
+//!   missing measurements and the Rauch-Tung-Striebel [`smooth`]er; [`anees_interval_95`] for
+//!   consistency checks.
 //! * Models: [`ConstantVelocity2`] (white-acceleration or the MCMCDA paper's G-matrix noise,
 //!   exact over a gap of k scans), [`RandomWalk`], [`LinearTransition`], [`LinearObservation`]
 //!   with position-only and full-state shortcuts.
@@ -20,6 +21,7 @@
 //! covariance; a failed factorisation is an [`Error`], never a panic; randomness comes only from
 //! the generator the caller passes in.
 
+mod consistency;
 mod error;
 mod gaussian;
 mod geometry;
@@ -33,10 +35,11 @@ mod track;
 #[cfg(test)]
 mod tests;
 
+pub use consistency::{anees_interval_95, chi_square_quantile_wh};
 pub use error::{Error, Result};
 pub use gaussian::{
-    Gaussian, LN_2PI, check_finite_matrix, check_positive_semidefinite, check_symmetric,
-    cholesky_checked,
+    CholeskyFactor, Gaussian, LN_2PI, check_finite_matrix, check_positive_semidefinite,
+    check_symmetric, cholesky_checked,
 };
 pub use geometry::{BoundingBox, Point2, Region, Region2, bearing_rad, wrap_angle_rad};
 pub use grid::{LikelihoodGrid, Peak, PeakConfig};

@@ -69,7 +69,9 @@ pub fn parse_mot<R: BufRead>(reader: R) -> Result<Vec<MotRow>> {
 }
 
 fn parse_row(text: &str) -> std::result::Result<MotRow, String> {
-    const NAMES: [&str; 10] = ["frame", "id", "left", "top", "width", "height", "conf", "x", "y", "z"];
+    const NAMES: [&str; 10] = [
+        "frame", "id", "left", "top", "width", "height", "conf", "x", "y", "z",
+    ];
     let fields: Vec<&str> = text.split(',').map(str::trim).collect();
     if !(6..=10).contains(&fields.len()) {
         return Err(format!(
@@ -79,23 +81,35 @@ fn parse_row(text: &str) -> std::result::Result<MotRow, String> {
     }
     let mut values = [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, -1.0, -1.0, -1.0];
     for (col, field) in fields.iter().enumerate() {
-        let v: f64 = field
-            .parse()
-            .map_err(|_| format!("column {} ({}) is not a number: {field:?}", col + 1, NAMES[col]))?;
+        let v: f64 = field.parse().map_err(|_| {
+            format!(
+                "column {} ({}) is not a number: {field:?}",
+                col + 1,
+                NAMES[col]
+            )
+        })?;
         if !v.is_finite() {
-            return Err(format!("column {} ({}) is not finite: {field:?}", col + 1, NAMES[col]));
+            return Err(format!(
+                "column {} ({}) is not finite: {field:?}",
+                col + 1,
+                NAMES[col]
+            ));
         }
         values[col] = v;
     }
     let frame = values[0];
     if frame.fract() != 0.0 || frame < 0.0 || frame > f64::from(u32::MAX) {
-        return Err(format!("frame must be a non-negative integer, found {}", fields[0]));
+        return Err(format!(
+            "frame must be a non-negative integer, found {}",
+            fields[0]
+        ));
     }
     let id = values[1];
     if id.fract() != 0.0 || id.abs() > 9.0e15 {
         return Err(format!("id must be an integer, found {}", fields[1]));
     }
-    let bbox = BoundingBox::new(values[2], values[3], values[4], values[5]).map_err(|e| e.to_string())?;
+    let bbox =
+        BoundingBox::new(values[2], values[3], values[4], values[5]).map_err(|e| e.to_string())?;
     Ok(MotRow {
         frame: frame as Frame,
         id: id as i64,
@@ -119,7 +133,10 @@ impl TrackSet {
             if row.id < 0 {
                 return Err(Error::InvalidParameter {
                     name: "track id",
-                    reason: format!("frame {}: id {} is negative; tracks need ids >= 0", row.frame, row.id),
+                    reason: format!(
+                        "frame {}: id {} is negative; tracks need ids >= 0",
+                        row.frame, row.id
+                    ),
                 });
             }
             by_id

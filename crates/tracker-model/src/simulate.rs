@@ -98,10 +98,12 @@ impl SimulationConfig {
             if v == 0.0 {
                 return Ok(None);
             }
-            Poisson::new(v).map(Some).map_err(|e| Error::InvalidParameter {
-                name,
-                reason: e.to_string(),
-            })
+            Poisson::new(v)
+                .map(Some)
+                .map_err(|e| Error::InvalidParameter {
+                    name,
+                    reason: e.to_string(),
+                })
         };
         let births = rate(self.births_per_scan, "births_per_scan")?;
         let clutter = rate(self.clutter_per_scan, "clutter_per_scan")?;
@@ -121,7 +123,8 @@ impl SimulationConfig {
                 reason: format!("{v} must be finite and > 0"),
             });
         }
-        let measurement_factor = cholesky_checked(&self.measurement_noise, "measurement_noise")?.l();
+        let measurement_factor =
+            cholesky_checked(&self.measurement_noise, "measurement_noise")?.l();
         Ok(Simulator {
             births,
             clutter,
@@ -247,7 +250,8 @@ impl Simulator {
         if let Some(v_max) = self.config.max_speed {
             let speed = state[2].hypot(state[3]);
             if speed > v_max {
-                let scale = v_max / speed;
+                // Shrink by two ulps more than needed so rounding cannot leave it above v_max.
+                let scale = v_max / speed * (1.0 - 2.0 * f64::EPSILON);
                 state[2] *= scale;
                 state[3] *= scale;
             }

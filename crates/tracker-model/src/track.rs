@@ -12,9 +12,7 @@ use crate::geometry::{BoundingBox, Point2};
 pub type Frame = u32;
 
 /// Identity of a track, or of a true target in simulated truth.
-#[derive(
-    Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize,
-)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub struct TrackId(pub u64);
 
 /// Where a measurement truly came from. Only simulated data knows; trackers must not look.
@@ -166,10 +164,14 @@ impl Track {
         }
         let finite = match point.location {
             Location::Point(p) => p.iter().all(|v| v.is_finite()),
-            Location::Box(b) => [b.left, b.top, b.width, b.height].iter().all(|v| v.is_finite()),
+            Location::Box(b) => [b.left, b.top, b.width, b.height]
+                .iter()
+                .all(|v| v.is_finite()),
         };
         if !finite {
-            return Err(Error::NonFinite { what: "track location" });
+            return Err(Error::NonFinite {
+                what: "track location",
+            });
         }
         self.points.push(point);
         Ok(())
@@ -302,7 +304,9 @@ impl TrackSet {
                 frames.entry(p.frame).or_default().push((t.id, *p));
             }
         }
-        frames.values_mut().for_each(|v| v.sort_by_key(|(id, _)| *id));
+        frames
+            .values_mut()
+            .for_each(|v| v.sort_by_key(|(id, _)| *id));
         frames
     }
 

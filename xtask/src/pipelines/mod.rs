@@ -1,0 +1,29 @@
+//! The pipelines a scenario file can name. Each reads its own `[params]`, runs with the
+//! scenario's seeded generator, and returns metrics plus a report section.
+
+use anyhow::Result;
+use indicatif::ProgressBar;
+
+use crate::scenario::{PipelineOutput, Scenario};
+
+mod kalman;
+mod simulator;
+
+/// A pipeline: scenario in, metrics and report section out; ticks `progress` as it goes.
+pub type PipelineFn = fn(&Scenario, &ProgressBar) -> Result<PipelineOutput>;
+
+/// Every pipeline by name.
+const PIPELINES: &[(&str, PipelineFn)] = &[
+    ("kalman-crossing", kalman::run),
+    ("simulator-poisson", simulator::run),
+];
+
+/// The pipeline called `name`.
+pub fn find(name: &str) -> Option<PipelineFn> {
+    PIPELINES.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
+}
+
+/// All pipeline names, for error messages.
+pub fn names() -> Vec<&'static str> {
+    PIPELINES.iter().map(|(n, _)| *n).collect()
+}

@@ -1,0 +1,318 @@
+//! The scenario regression suite: `fixtures/scenarios/NAME.toml` names a pipeline, a seed, its
+//! parameters and tolerances; `fixtures/expected/NAME.json` holds the metrics it must reproduce.
+
+use std::collections::BTreeMap;
+use std::fs;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, anyhow, bail};
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+use crate::report::Section;
+use crate::{Outcome, pipelines, workspace_root};
+
+/// Metric name → value, sorted so that expected files diff cleanly.
+pub type Metrics = BTreeMap<String, f64>;
+
+/// One scenario file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScenarioFile {
+    /// Which pipeline runs it (see `pipelines::PIPELINES`).
+    pub pipeline: String,
+    /// Seed of the scenario's generator.
+    pub seed: u64,
+    /// One sentence on what the scenario pins.
+    #[serde(default)]
+    pub description: String,
+    /// Pipeline parameters, read by the pipeline into its own config struct.
+    #[serde(default)]
+    pub params: toml::Table,
+    /// How far each metric may move before it counts as a regression.
+    #[serde(default)]
+    pub tolerance: Tolerances,
+}
+
+/// Tolerances: a default and per-metric overrides.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tolerances {
+    /// Applies to every metric without an override.
+    #[serde(default)]
+    pub default: Tolerance,
+    /// Per-metric overrides.
+    #[serde(default)]
+    pub metrics: BTreeMap<String, Tolerance>,
+}
+
+/// |actual − expected| ≤ abs + rel·|expected|.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Tolerance {
+    /// Absolute part.
+    #[serde(default)]
+    pub abs: f64,
+    /// Relative part.
+    #[serde(default)]
+    pub rel: f64,
+}
+
+impl Default for Tolerance {
+    fn default() -> Self {
+        // Same seed, same code: only libm differences across platforms should move a metric.
+        Self {
+            abs: 1e-12,
+            rel: 1e-9,
+        }
+    }
+}
+
+impl Tolerance {
+    fn accepts(&self, actual: f64, expected: f64) -> bool {
+        (actual - expected).abs() <= self.abs + self.rel * expected.abs()
+    }
+}
+
+/// A scenario with its name (the file stem).
+#[derive(Debug, Clone)]
+pub struct Scenario {
+    /// File stem, e.g. `kalman-cv-crossing`.
+    pub name: String,
+    /// Parsed contents.
+    pub file: ScenarioFile,
+}
+
+impl Scenario {
+    /// The pipeline's parameters as its own config type; unknown keys are errors.
+    pub fn params<P: DeserializeOwned>(&self) -> Result<P> {
+        toml::Value::Table(self.file.params.clone())
+            .try_into()
+            .with_context(|| format!("scenario {}: bad [params]", self.name))
+    }
+
+    /// The scenario's generator, seeded from the file. Pipelines that run work in parallel give
+    /// each task its own stream of this seed (`set_stream`), so results do not depend on the
+    /// number of threads.
+    pub fn rng(&self) -> ChaCha8Rng {
+        ChaCha8Rng::seed_from_u64(self.file.seed)
+    }
+}
+
+/// What a pipeline produces: metrics for the regression check, a section for the report.
+pub struct PipelineOutput {
+    /// The metrics compared with the expected file.
+    pub metrics: Metrics,
+    /// Tables and plots for the report.
+    pub section: Section,
+}
+
+/// A finished scenario run.
+pub struct RunResult {
+    /// The scenario.
+    pub scenario: Scenario,
+    /// Its output, or the error that stopped it.
+    pub output: Result<PipelineOutput>,
+    /// Wall time.
+    pub elapsed: Duration,
+}
+
+fn scenarios_dir() -> PathBuf {
+    workspace_root().join("fixtures/scenarios")
+}
+
+fn expected_path(name: &str) -> PathBuf {
+    workspace_root()
+        .join("fixtures/expected")
+        .join(format!("{name}.json"))
+}
+
+/// Loads every scenario file, sorted by name, optionally filtered.
+pub fn load_all(filter: Option<&str>) -> Result<Vec<Scenario>> {
+    let dir = scenarios_dir();
+    let mut out = Vec::new();
+    for entry in fs::read_dir(&dir).with_context(|| format!("reading {}", dir.display()))? {
+        let path = entry?.path();
+        if path.extension().and_then(|e| e.to_str()) != Some("toml") {
+            continue;
+        }
+        let name = path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .ok_or_else(|| anyhow!("bad file name {}", path.display()))?
+            .to_string();
+        if filter.is_some_and(|f| !name.contains(f)) {
+            continue;
+        }
+        out.push(Scenario {
+            file: load_file(&path)?,
+            name,
+        });
+    }
+    out.sort_by(|a, b| a.name.cmp(&b.name));
+    Ok(out)
+}
+
+fn load_file(path: &Path) -> Result<ScenarioFile> {
+    let text = fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let file: ScenarioFile =
+        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    if pipelines::find(&file.pipeline).is_none() {
+        bail!(
+            "{}: unknown pipeline {:?}; known: {}",
+            path.display(),
+            file.pipeline,
+            pipelines::names().join(", ")
+        );
+    }
+    Ok(file)
+}
+
+/// Runs scenarios in parallel (each on its own seeded generator), returning results in name
+/// order. A progress bar per scenario is drawn when stderr is a terminal.
+pub fn run_all(scenarios: Vec<Scenario>) -> Vec<RunResult> {
+    let multi = MultiProgress::with_draw_target(if std::io::stderr().is_terminal() {
+        ProgressDrawTarget::stderr()
+    } else {
+        ProgressDrawTarget::hidden()
+    });
+    let style = ProgressStyle::with_template("{prefix:>28} {bar:30} {pos}/{len} {elapsed}")
+        .unwrap_or_else(|_| ProgressStyle::default_bar());
+    scenarios
+        .into_par_iter()
+        .map(|scenario| {
+            let bar = multi.add(ProgressBar::new(1).with_style(style.clone()));
+            bar.set_prefix(scenario.name.clone());
+            let start = Instant::now();
+            let output = match pipelines::find(&scenario.file.pipeline) {
+                Some(run) => run(&scenario, &bar),
+                None => Err(anyhow!("unknown pipeline {}", scenario.file.pipeline)),
+            }
+            .and_then(
+                |out| match out.metrics.iter().find(|(_, v)| !v.is_finite()) {
+                    Some((k, v)) => Err(anyhow!("metric {k} is not finite ({v})")),
+                    None => Ok(out),
+                },
+            );
+            bar.finish_and_clear();
+            RunResult {
+                scenario,
+                output,
+                elapsed: start.elapsed(),
+            }
+        })
+        .collect()
+}
+
+/// Compares metrics with the expected file; returns the problems found (empty = pass).
+pub fn compare(scenario: &Scenario, metrics: &Metrics) -> Result<Vec<String>> {
+    let path = expected_path(&scenario.name);
+    let text = match fs::read_to_string(&path) {
+        Ok(text) => text,
+        Err(_) => {
+            return Ok(vec![format!(
+                "no {} yet; review the numbers and run `cargo xtask scenarios --bless`",
+                path.display()
+            )]);
+        }
+    };
+    let expected: Metrics =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let tol = &scenario.file.tolerance;
+    let mut problems = Vec::new();
+    for (key, &want) in &expected {
+        let t = tol.metrics.get(key).copied().unwrap_or(tol.default);
+        match metrics.get(key) {
+            None => problems.push(format!("{key}: missing (expected {want})")),
+            Some(&got) if !t.accepts(got, want) => problems.push(format!(
+                "{key}: got {got}, expected {want} (abs {} + rel {})",
+                t.abs, t.rel
+            )),
+            Some(_) => {}
+        }
+    }
+    for key in metrics.keys().filter(|k| !expected.contains_key(*k)) {
+        problems.push(format!(
+            "{key}: new metric not in the expected file (bless to add it)"
+        ));
+    }
+    Ok(problems)
+}
+
+/// Writes the expected file of a scenario (sorted keys, pretty JSON).
+pub fn bless(scenario: &Scenario, metrics: &Metrics) -> Result<()> {
+    #[derive(Serialize)]
+    #[serde(transparent)]
+    struct Sorted<'a>(&'a Metrics);
+    let path = expected_path(&scenario.name);
+    if let Some(dir) = path.parent() {
+        fs::create_dir_all(dir)?;
+    }
+    let text = serde_json::to_string_pretty(&Sorted(metrics))? + "\n";
+    fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Checks (or blesses) every result, printing one line per scenario; true when all pass.
+#[expect(clippy::print_stdout, reason = "the suite reports on the terminal")]
+pub fn check_results(results: &[RunResult], bless_results: bool) -> Result<bool> {
+    let mut all_ok = true;
+    for r in results {
+        let secs = r.elapsed.as_secs_f64();
+        match &r.output {
+            Err(err) => {
+                all_ok = false;
+                println!("FAIL {:<28} {secs:>7.2}s  error: {err:#}", r.scenario.name);
+            }
+            Ok(out) if bless_results => {
+                bless(&r.scenario, &out.metrics)?;
+                println!(
+                    "bless {:<27} {secs:>7.2}s  {} metrics written",
+                    r.scenario.name,
+                    out.metrics.len()
+                );
+            }
+            Ok(out) => {
+                let problems = compare(&r.scenario, &out.metrics)?;
+                if problems.is_empty() {
+                    println!(
+                        "ok   {:<28} {secs:>7.2}s  {} metrics match",
+                        r.scenario.name,
+                        out.metrics.len()
+                    );
+                } else {
+                    all_ok = false;
+                    println!("FAIL {:<28} {secs:>7.2}s", r.scenario.name);
+                    for p in problems {
+                        println!("       {p}");
+                    }
+                }
+            }
+        }
+    }
+    Ok(all_ok)
+}
+
+/// `cargo xtask scenarios`.
+#[expect(clippy::print_stdout, reason = "the suite reports on the terminal")]
+pub fn run_suite(filter: Option<&str>, bless_results: bool) -> Outcome {
+    let scenarios = load_all(filter)?;
+    if scenarios.is_empty() {
+        bail!("no scenario matches {filter:?}");
+    }
+    let n = scenarios.len();
+    let results = run_all(scenarios);
+    let ok = check_results(&results, bless_results)?;
+    let verdict = match (bless_results, ok) {
+        (true, _) => "blessed",
+        (false, true) => "passed",
+        (false, false) => "run, with failures listed above",
+    };
+    println!("{n} scenarios {verdict}");
+    Ok(ok)
+}
