@@ -11,6 +11,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod ci;
+mod eval;
 mod pipelines;
 mod plot;
 mod report;
@@ -43,6 +44,21 @@ enum Command {
     },
     /// fmt, clippy, tests, docs, bench build and the scenario suite: what CI runs.
     Ci,
+    /// Score a tracker's MOTChallenge output against MOTChallenge ground truth.
+    Eval {
+        /// Ground truth (frame,id,left,top,width,height,conf,...); rows with conf 0 are ignored.
+        #[arg(long)]
+        gt: PathBuf,
+        /// Tracker output in the same format.
+        #[arg(long)]
+        pred: PathBuf,
+        /// IoU a box pair needs to match.
+        #[arg(long, default_value_t = 0.5)]
+        iou: f64,
+        /// Print JSON instead of a table.
+        #[arg(long)]
+        json: bool,
+    },
 }
 
 fn main() -> ExitCode {
@@ -51,6 +67,12 @@ fn main() -> ExitCode {
         Command::Scenarios { bless, filter } => scenario::run_suite(filter.as_deref(), bless),
         Command::Report { out } => report::run(&out),
         Command::Ci => ci::run(),
+        Command::Eval {
+            gt,
+            pred,
+            iou,
+            json,
+        } => eval::run(&gt, &pred, iou, json),
     };
     match outcome {
         Ok(true) => ExitCode::SUCCESS,

@@ -3,14 +3,12 @@
 //! matches, per-frame assignments maximising alignment × similarity, then detection and
 //! association scores at each α ∈ {0.05, …, 0.95}, averaged.
 
-use std::collections::HashMap;
-
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::assignment;
 use crate::error::Result;
-use crate::sequence::Sequence;
+use crate::sequence::{NO_PAIR, Sequence};
 
 /// The localisation thresholds α.
 pub const ALPHAS: [f64; 19] = [
@@ -43,8 +41,8 @@ pub struct HotaMetrics {
 
 /// Per-frame result of the second pass.
 struct FrameMatches {
-    /// (truth, estimate, similarity) of the assigned pairs with positive similarity.
-    pairs: Vec<(usize, usize, f64)>,
+    /// (pair index, similarity) of the assigned pairs with positive similarity.
+    pairs: Vec<(u32, f64)>,
 }
 
 /// Computes HOTA over an aligned sequence. Frames are assigned in parallel; the reduction runs
@@ -69,50 +67,51 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
     // Pass 1: potential matches, soft-counted per frame, and object sizes.
     let mut gt_count = vec![0.0f64; seq.gt_ids.len()];
     let mut pred_count = vec![0.0f64; seq.pred_ids.len()];
-    let mut potential: HashMap<(usize, usize), f64> = HashMap::new();
+    let mut potential = vec![0.0f64; seq.pairs.len()];
+    let mut row_sums = Vec::new();
+    let mut col_sums = Vec::new();
     for f in &seq.frames {
-        let np = f.pred.len();
-        let row_sums: Vec<f64> = (0..f.gt.len())
-            .map(|i| f.sim[i * np..(i + 1) * np].iter().sum())
-            .collect();
-        let col_sums: Vec<f64> = (0..np)
-            .map(|j| (0..f.gt.len()).map(|i| f.sim(i, j)).sum())
-            .collect();
-        for (i, &g) in f.gt.iter().enumerate() {
-            for (j, &h) in f.pred.iter().enumerate() {
-                let s = f.sim(i, j);
-                if s > 0.0 {
-                    *potential.entry((g, h)).or_insert(0.0) += s / (row_sums[i] + col_sums[j] - s);
-                }
+        let (ng, np) = (f.gt.len(), f.pred.len());
+        row_sums.clear();
+        row_sums.extend((0..ng).map(|i| f.sim[i * np..(i + 1) * np].iter().sum::<f64>()));
+        col_sums.clear();
+        col_sums.extend((0..np).map(|j| (0..ng).map(|i| f.sim(i, j)).sum::<f64>()));
+        for (k, (&s, &pair)) in f.sim.iter().zip(&f.pair).enumerate() {
+            if pair != NO_PAIR {
+                potential[pair as usize] += s / (row_sums[k / np] + col_sums[k % np] - s);
             }
         }
         f.gt.iter().for_each(|&g| gt_count[g] += 1.0);
         f.pred.iter().for_each(|&h| pred_count[h] += 1.0);
     }
-    let alignment = |g: usize, h: usize| -> f64 {
-        potential
-            .get(&(g, h))
-            .map_or(0.0, |&p| p / (gt_count[g] + pred_count[h] - p))
-    };
+    let alignment: Vec<f64> = seq
+        .pairs
+        .iter()
+        .zip(&potential)
+        .map(|(&(g, h), &p)| p / (gt_count[g] + pred_count[h] - p))
+        .collect();
     // Pass 2: per-frame assignment maximising alignment × similarity.
     let matches: Vec<FrameMatches> = seq
         .frames
         .par_iter()
         .map(|f| {
             let np = f.pred.len();
-            let mut score = vec![0.0; f.gt.len() * np];
-            for (i, &g) in f.gt.iter().enumerate() {
-                for (j, &h) in f.pred.iter().enumerate() {
-                    let s = f.sim(i, j);
-                    if s > 0.0 {
-                        score[i * np + j] = alignment(g, h) * s;
+            let score: Vec<f64> = f
+                .sim
+                .iter()
+                .zip(&f.pair)
+                .map(|(&s, &pair)| {
+                    if pair == NO_PAIR {
+                        0.0
+                    } else {
+                        alignment[pair as usize] * s
                     }
-                }
-            }
+                })
+                .collect();
             let pairs = assignment::maximise(f.gt.len(), np, &score)?
                 .into_iter()
-                .map(|(i, j)| (f.gt[i], f.pred[j], f.sim(i, j)))
-                .filter(|&(_, _, s)| s > 0.0)
+                .map(|(i, j)| (f.pair[i * np + j], f.sim(i, j)))
+                .filter(|&(pair, _)| pair != NO_PAIR)
                 .collect();
             Ok(FrameMatches { pairs })
         })
@@ -121,10 +120,10 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
     let n_alpha = ALPHAS.len();
     let mut tp = vec![0.0f64; n_alpha];
     let mut loc = vec![0.0f64; n_alpha];
-    let mut pair_counts: HashMap<(usize, usize), [f64; 19]> = HashMap::new();
+    let mut pair_counts = vec![[0.0f64; 19]; seq.pairs.len()];
     for fm in &matches {
-        for &(g, h, s) in &fm.pairs {
-            let counts = pair_counts.entry((g, h)).or_insert([0.0; 19]);
+        for &(pair, s) in &fm.pairs {
+            let counts = &mut pair_counts[pair as usize];
             for (a, alpha) in ALPHAS.iter().enumerate() {
                 if s >= alpha - f64::EPSILON {
                     tp[a] += 1.0;
@@ -145,17 +144,14 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
         ass_pr: 0.0,
         per_alpha: Vec::with_capacity(n_alpha),
     };
-    // Sum over pairs in a fixed order so that the floating-point result is reproducible.
-    let mut pairs: Vec<_> = pair_counts.into_iter().collect();
-    pairs.sort_unstable_by_key(|(k, _)| *k);
     for a in 0..n_alpha {
         let tp_a = tp[a];
         let (fn_a, fp_a) = (n_gt - tp_a, n_pred - tp_a);
         let (mut ass_a, mut ass_re, mut ass_pr) = (0.0, 0.0, 0.0);
-        for ((g, h), counts) in &pairs {
+        for (&(g, h), counts) in seq.pairs.iter().zip(&pair_counts) {
             let m = counts[a];
             if m > 0.0 {
-                let (ng, nh) = (gt_count[*g], pred_count[*h]);
+                let (ng, nh) = (gt_count[g], pred_count[h]);
                 ass_a += m * m / (ng + nh - m);
                 ass_re += m * m / ng;
                 ass_pr += m * m / nh;

@@ -7,13 +7,11 @@
 //! of the m_gh, which is what we solve (TrackEval solves the equivalent square problem with
 //! dummy rows and columns; `tests` checks the two against brute force).
 
-use std::collections::HashMap;
-
 use serde::{Deserialize, Serialize};
 
 use crate::assignment;
 use crate::error::Result;
-use crate::sequence::Sequence;
+use crate::sequence::{NO_PAIR, Sequence};
 
 /// IDF1 and its parts.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -35,15 +33,13 @@ pub struct IdentityMetrics {
     pub pairs: Vec<(usize, usize)>,
 }
 
-/// Frames in which each (truth, estimate) pair matches at `threshold`, keyed by dense indices.
-pub(crate) fn match_counts(seq: &Sequence, threshold: f64) -> HashMap<(usize, usize), usize> {
-    let mut counts = HashMap::new();
+/// Frames in which each pair of [`Sequence::pairs`] matches at `threshold`.
+fn match_counts(seq: &Sequence, threshold: f64) -> Vec<usize> {
+    let mut counts = vec![0usize; seq.pairs.len()];
     for f in &seq.frames {
-        for (i, &g) in f.gt.iter().enumerate() {
-            for (j, &h) in f.pred.iter().enumerate() {
-                if f.sim(i, j) >= threshold - f64::EPSILON {
-                    *counts.entry((g, h)).or_insert(0) += 1;
-                }
+        for (&s, &pair) in f.sim.iter().zip(&f.pair) {
+            if pair != NO_PAIR && s >= threshold - f64::EPSILON {
+                counts[pair as usize] += 1;
             }
         }
     }
@@ -53,15 +49,16 @@ pub(crate) fn match_counts(seq: &Sequence, threshold: f64) -> HashMap<(usize, us
 /// Computes IDF1, IDP and IDR with match threshold `threshold`.
 pub fn identity(seq: &Sequence, threshold: f64) -> Result<IdentityMetrics> {
     let counts = match_counts(seq, threshold);
+    let matching = || seq.pairs.iter().zip(&counts).filter(|(_, c)| **c > 0);
     // Only trajectories that match something can be paired usefully; compress to those.
-    let mut rows: Vec<usize> = counts.keys().map(|k| k.0).collect();
-    let mut cols: Vec<usize> = counts.keys().map(|k| k.1).collect();
+    let mut rows: Vec<usize> = matching().map(|(k, _)| k.0).collect();
+    let mut cols: Vec<usize> = matching().map(|(k, _)| k.1).collect();
     rows.sort_unstable();
     rows.dedup();
     cols.sort_unstable();
     cols.dedup();
     let mut weights = vec![0.0; rows.len() * cols.len()];
-    for (&(g, h), &c) in &counts {
+    for (&(g, h), &c) in matching() {
         let (Ok(r), Ok(c_idx)) = (rows.binary_search(&g), cols.binary_search(&h)) else {
             continue;
         };

@@ -51,7 +51,7 @@ pub use seed::{
     AssociationScores, Mae, SuccessRate, TrackError, association_scores, distance_error_series,
     mae, mean_error_per_track, mmae, success_rate,
 };
-pub use sequence::{FrameData, Sequence};
+pub use sequence::{FrameData, NO_PAIR, Sequence};
 pub use similarity::{MatchConfig, Similarity};
 
 /// What [`evaluate`] computes with.

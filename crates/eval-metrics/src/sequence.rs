@@ -1,12 +1,16 @@
 //! The per-frame view that CLEAR MOT, identity and HOTA metrics share: for every frame, which
 //! truth and estimated objects are present and the similarity of every pair. Computed once.
 
-use std::collections::BTreeMap;
+use std::collections::HashMap;
 
+use rayon::prelude::*;
 use tracker_model::{Frame, Location, TrackId, TrackPoint, TrackSet};
 
 use crate::error::{Error, Result};
 use crate::similarity::Similarity;
+
+/// Marks a frame entry whose similarity is 0 (the pair is not in [`Sequence::pairs`]).
+pub const NO_PAIR: u32 = u32::MAX;
 
 /// One frame: dense indices of the objects present and their similarity matrix.
 #[derive(Debug, Clone)]
@@ -19,6 +23,9 @@ pub struct FrameData {
     pub pred: Vec<usize>,
     /// Row-major `gt.len() × pred.len()` similarities.
     pub sim: Vec<f64>,
+    /// For each entry of `sim`, the index of its (truth, estimate) pair in
+    /// [`Sequence::pairs`], or [`NO_PAIR`] where the similarity is 0.
+    pub pair: Vec<u32>,
 }
 
 impl FrameData {
@@ -37,14 +44,50 @@ pub struct Sequence {
     pub pred_ids: Vec<TrackId>,
     /// Frames in increasing order: every frame where truth or an estimate exists.
     pub frames: Vec<FrameData>,
+    /// Every (truth, estimate) pair with positive similarity in some frame, numbered in order
+    /// of first appearance; metrics accumulate per pair in plain vectors indexed this way.
+    pub pairs: Vec<(usize, usize)>,
     /// Number of truth detections (object-frames).
     pub n_gt_dets: usize,
     /// Number of estimated detections.
     pub n_pred_dets: usize,
 }
 
+/// (frame, side: 0 truth / 1 estimate, dense track index, point). A reference keeps the
+/// entries small, which makes sorting them cheap.
+type Entry<'a> = (Frame, u8, usize, &'a TrackPoint);
+
+fn entries<'a>(set: &'a TrackSet, side: u8, out: &mut Vec<Entry<'a>>) {
+    for (idx, t) in set.tracks().iter().enumerate() {
+        out.extend(t.points().iter().map(|p| (p.frame, side, idx, p)));
+    }
+}
+
+/// Groups entries by frame, frames ascending, truth before estimates and tracks in index order
+/// within a frame. Frame numbers are usually dense, so a bucket per frame avoids sorting; a
+/// sparse numbering (huge gaps) falls back to a sort.
+fn group_by_frame(mut all: Vec<Entry<'_>>) -> Vec<Vec<Entry<'_>>> {
+    let Some(first) = all.iter().map(|e| e.0).min() else {
+        return Vec::new();
+    };
+    let last = all.iter().map(|e| e.0).max().unwrap_or(first);
+    let span = (last - first) as usize + 1;
+    if span > 4 * all.len() + 1024 {
+        all.sort_unstable_by_key(|e| (e.0, e.1, e.2));
+        return all.chunk_by(|a, b| a.0 == b.0).map(<[_]>::to_vec).collect();
+    }
+    // `entries` pushes truth before estimates and tracks in index order, so pushing into
+    // buckets in input order already gives the order within each frame.
+    let mut buckets: Vec<Vec<Entry<'_>>> = vec![Vec::new(); span];
+    for e in all {
+        buckets[(e.0 - first) as usize].push(e);
+    }
+    buckets.retain(|b| !b.is_empty());
+    buckets
+}
+
 impl Sequence {
-    /// Aligns `gt` and `pred` and computes every similarity.
+    /// Aligns `gt` and `pred` and computes every similarity (frames in parallel).
     pub fn new(gt: &TrackSet, pred: &TrackSet, similarity: Similarity) -> Result<Self> {
         if similarity == Similarity::Iou {
             for (set, side) in [(gt, "truth"), (pred, "estimate")] {
@@ -60,42 +103,57 @@ impl Sequence {
                 }
             }
         }
-        let gt_ids: Vec<TrackId> = gt.tracks().iter().map(|t| t.id()).collect();
-        let pred_ids: Vec<TrackId> = pred.tracks().iter().map(|t| t.id()).collect();
-        // Frame → (truth points, estimate points), each with its dense index.
-        let mut by_frame: BTreeMap<Frame, (Vec<(usize, TrackPoint)>, Vec<(usize, TrackPoint)>)> =
-            BTreeMap::new();
-        for (idx, t) in gt.tracks().iter().enumerate() {
-            for p in t.points() {
-                by_frame.entry(p.frame).or_default().0.push((idx, *p));
-            }
-        }
-        for (idx, t) in pred.tracks().iter().enumerate() {
-            for p in t.points() {
-                by_frame.entry(p.frame).or_default().1.push((idx, *p));
-            }
-        }
-        let mut frames = Vec::with_capacity(by_frame.len());
-        for (frame, (g, h)) in by_frame {
-            let mut sim = Vec::with_capacity(g.len() * h.len());
-            for (_, gp) in &g {
-                for (_, hp) in &h {
-                    sim.push(similarity.between(&gp.location, &hp.location)?);
-                }
-            }
-            frames.push(FrameData {
-                frame,
-                gt: g.iter().map(|(i, _)| *i).collect(),
-                pred: h.iter().map(|(i, _)| *i).collect(),
-                sim,
-            });
+        let mut all = Vec::with_capacity(gt.n_points() + pred.n_points());
+        entries(gt, 0, &mut all);
+        entries(pred, 1, &mut all);
+        let groups = group_by_frame(all);
+        let mut frames = groups
+            .par_iter()
+            .map(|group| {
+                let group = group.as_slice();
+                let split = group.partition_point(|e| e.1 == 0);
+                let (g, h) = group.split_at(split);
+                let sim = similarity.matrix(
+                    &g.iter().map(|e| e.3.location).collect::<Vec<_>>(),
+                    &h.iter().map(|e| e.3.location).collect::<Vec<_>>(),
+                )?;
+                Ok(FrameData {
+                    frame: group[0].0,
+                    gt: g.iter().map(|e| e.2).collect(),
+                    pred: h.iter().map(|e| e.2).collect(),
+                    pair: Vec::new(),
+                    sim,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        // Number the pairs sequentially, in frame order, so the numbering is deterministic.
+        let mut index: HashMap<(usize, usize), u32> = HashMap::new();
+        let mut pairs = Vec::new();
+        for f in &mut frames {
+            let np = f.pred.len();
+            f.pair = f
+                .sim
+                .iter()
+                .enumerate()
+                .map(|(k, &s)| {
+                    if s <= 0.0 {
+                        return NO_PAIR;
+                    }
+                    let key = (f.gt[k / np], f.pred[k % np]);
+                    *index.entry(key).or_insert_with(|| {
+                        pairs.push(key);
+                        (pairs.len() - 1) as u32
+                    })
+                })
+                .collect();
         }
         Ok(Self {
             n_gt_dets: gt.n_points(),
             n_pred_dets: pred.n_points(),
-            gt_ids,
-            pred_ids,
+            gt_ids: gt.tracks().iter().map(|t| t.id()).collect(),
+            pred_ids: pred.tracks().iter().map(|t| t.id()).collect(),
             frames,
+            pairs,
         })
     }
 }

@@ -2,7 +2,7 @@
 //! similarity of points, both in [0, 1] so that every metric uses one threshold convention.
 
 use serde::{Deserialize, Serialize};
-use tracker_model::Location;
+use tracker_model::{BoundingBox, Location, Point2};
 
 use crate::error::{Error, Result};
 
@@ -69,6 +69,40 @@ impl MatchConfig {
 }
 
 impl Similarity {
+    /// Row-major similarities of every (truth, estimate) pair. The kind is matched once, so the
+    /// inner loop is a plain IoU or distance computation.
+    pub fn matrix(&self, gt: &[Location], pred: &[Location]) -> Result<Vec<f64>> {
+        let mut out = Vec::with_capacity(gt.len() * pred.len());
+        match self {
+            Similarity::Iou => {
+                let as_box = |l: &Location| {
+                    match l {
+                    Location::Box(b) => Ok(*b),
+                    Location::Point(_) => Err(Error::Incompatible(
+                        "IoU similarity needs boxes on both sides; use a distance similarity for points".into(),
+                    )),
+                }
+                };
+                let g: Vec<BoundingBox> = gt.iter().map(as_box).collect::<Result<_>>()?;
+                let h: Vec<BoundingBox> = pred.iter().map(as_box).collect::<Result<_>>()?;
+                for a in &g {
+                    out.extend(h.iter().map(|b| a.iou(b)));
+                }
+            }
+            Similarity::Distance { zero_at } => {
+                let h: Vec<Point2> = pred.iter().map(Location::position).collect();
+                for a in gt {
+                    let pa = a.position();
+                    out.extend(
+                        h.iter()
+                            .map(|pb| (1.0 - (pa - pb).norm() / zero_at).max(0.0)),
+                    );
+                }
+            }
+        }
+        Ok(out)
+    }
+
     /// The similarity of `gt` and `pred`, in [0, 1].
     pub fn between(&self, gt: &Location, pred: &Location) -> Result<f64> {
         match (self, gt, pred) {

@@ -1,5 +1,9 @@
 //! Hand-computed cases for every metric, brute-force checks of the identity assignment,
 //! property tests of OSPA/GOSPA, and box/point agreement.
+#![expect(
+    clippy::float_cmp,
+    reason = "exact values such as 0 and the cut-off c are exact here"
+)]
 
 use approx::assert_relative_eq;
 use proptest::prelude::*;
@@ -65,7 +69,7 @@ struct Expect {
     faf: f64,
 }
 
-fn check(gt: Desc<'_>, pred: Desc<'_>, e: Expect) {
+fn check(gt: Desc<'_>, pred: Desc<'_>, e: &Expect) {
     let r = eval_boxes(gt, pred);
     let c = &r.clear;
     assert_eq!(
@@ -114,7 +118,7 @@ fn empty_truth() {
     check(
         &[],
         &[(1, &[(1, 0.0), (2, 0.0)]), (2, &[(2, 50.0)])],
-        Expect {
+        &Expect {
             mota: -3.0,
             motp: 0.0,
             tp: 0,
@@ -140,7 +144,7 @@ fn empty_estimates() {
     check(
         &[(1, &[(1, 0.0), (2, 0.0), (3, 0.0)])],
         &[],
-        Expect {
+        &Expect {
             mota: 0.0,
             motp: 0.0,
             tp: 0,
@@ -168,7 +172,7 @@ fn all_missed() {
     check(
         &[(1, &[(1, 0.0), (2, 0.0)])],
         &[(9, &[(1, 50.0), (2, 50.0)])],
-        Expect {
+        &Expect {
             mota: -1.0,
             motp: 0.0,
             tp: 0,
@@ -196,7 +200,7 @@ fn all_false() {
     check(
         &[(1, &[(1, 0.0), (2, 0.0)])],
         &[(9, &[(3, 0.0), (4, 0.0)])],
-        Expect {
+        &Expect {
             mota: -1.0,
             motp: 0.0,
             tp: 0,
@@ -226,7 +230,7 @@ fn one_id_switch() {
     check(
         &[(1, &[(1, 0.0), (2, 0.0), (3, 0.0), (4, 0.0)])],
         &[(1, &[(1, 0.0), (2, 0.0)]), (2, &[(3, 0.0), (4, 0.0)])],
-        Expect {
+        &Expect {
             mota: 0.75,
             motp: 1.0,
             tp: 4,
@@ -254,7 +258,7 @@ fn one_fragmentation() {
     check(
         &[(1, &[(1, 0.0), (2, 0.0), (3, 0.0), (4, 0.0), (5, 0.0)])],
         &[(3, &[(1, 0.0), (2, 0.0), (4, 0.0), (5, 0.0)])],
-        Expect {
+        &Expect {
             mota: 0.8,
             motp: 1.0,
             tp: 4,
@@ -301,7 +305,7 @@ fn perfect_tracker() {
     check(
         gt,
         pred,
-        Expect {
+        &Expect {
             mota: 1.0,
             motp: 1.0,
             tp: 5,
@@ -339,7 +343,7 @@ fn perfect_detection_half_wrong_association() {
     check(
         gt,
         pred,
-        Expect {
+        &Expect {
             mota: 0.75,
             motp: 1.0,
             tp: 8,
@@ -374,55 +378,64 @@ fn clear_keeps_previous_partner_over_a_better_overlap() {
     assert_relative_eq!(r.clear.motp, (1.0 + 80.0 / 120.0) / 2.0, epsilon = 1e-12);
 }
 
-/// IDTP by brute force: the best one-to-one pairing of truth and estimated tracks (each may
-/// stay unpaired), minimising IDFN + IDFP.
+/// IDTP by brute force: try every partial one-to-one pairing of truth tracks with estimated
+/// tracks, score each by the definition IDFN + IDFP, and keep the best.
 fn brute_force_idtp(counts: &[Vec<usize>], gt_len: &[usize], pred_len: &[usize]) -> usize {
-    fn go(
-        g: usize,
-        used: &mut Vec<bool>,
+    fn cost(
+        pairing: &[Option<usize>],
         counts: &[Vec<usize>],
-        best: &mut usize,
-        acc: usize,
         gt_len: &[usize],
         pred_len: &[usize],
-        cost_of: &dyn Fn(usize) -> usize,
+    ) -> usize {
+        let mut idfn = 0;
+        let mut matched_in_pred = vec![0; pred_len.len()];
+        for (g, &h) in pairing.iter().enumerate() {
+            let m = h.map_or(0, |h| counts[g][h]);
+            idfn += gt_len[g] - m;
+            if let Some(h) = h {
+                matched_in_pred[h] = m;
+            }
+        }
+        let idfp: usize = pred_len
+            .iter()
+            .zip(&matched_in_pred)
+            .map(|(n, m)| n - m)
+            .sum();
+        idfn + idfp
+    }
+    fn search(
+        pairing: &mut Vec<Option<usize>>,
+        used: &mut [bool],
+        ctx: (&[Vec<usize>], &[usize], &[usize]),
+        best: &mut usize,
     ) {
-        if g == counts.len() {
-            *best = (*best).min(cost_of(acc));
+        let (counts, gt_len, pred_len) = ctx;
+        if pairing.len() == counts.len() {
+            *best = (*best).min(cost(pairing, counts, gt_len, pred_len));
             return;
         }
-        go(g + 1, used, counts, best, acc, gt_len, pred_len, cost_of);
+        pairing.push(None);
+        search(pairing, used, ctx, best);
+        pairing.pop();
         for h in 0..used.len() {
             if !used[h] {
                 used[h] = true;
-                go(
-                    g + 1,
-                    used,
-                    counts,
-                    best,
-                    acc + counts[g][h],
-                    gt_len,
-                    pred_len,
-                    cost_of,
-                );
+                pairing.push(Some(h));
+                search(pairing, used, ctx, best);
+                pairing.pop();
                 used[h] = false;
             }
         }
     }
-    let total: usize = gt_len.iter().sum::<usize>() + pred_len.iter().sum::<usize>();
-    let cost_of = |idtp: usize| total - 2 * idtp;
     let mut best = usize::MAX;
-    go(
-        0,
+    search(
+        &mut Vec::new(),
         &mut vec![false; pred_len.len()],
-        counts,
+        (counts, gt_len, pred_len),
         &mut best,
-        0,
-        gt_len,
-        pred_len,
-        &cost_of,
     );
-    (total - best) / 2
+    // IDFN + IDFP = Σ n_g + Σ n_h − 2 IDTP.
+    (gt_len.iter().sum::<usize>() + pred_len.iter().sum::<usize>() - best) / 2
 }
 
 #[test]
@@ -738,4 +751,68 @@ fn bad_configurations_are_errors() {
         matching: MatchConfig::iou(0.0),
     };
     assert!(evaluate(&gt, &gt, &bad).is_err());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Agreement with py-motmetrics on a synthetic sequence (testdata/gen_reference.py made the
+// files and the reference numbers; py-motmetrics is an independent implementation).
+
+#[test]
+fn clear_and_identity_agree_with_py_motmetrics() {
+    let load = |text: &str| {
+        TrackSet::from_mot_rows(&tracker_model::parse_mot(text.as_bytes()).unwrap()).unwrap()
+    };
+    let gt = load(include_str!("../testdata/synthetic-gt.txt"));
+    let pred = load(include_str!("../testdata/synthetic-pred.txt"));
+    let reference: std::collections::BTreeMap<String, serde_json::Value> =
+        serde_json::from_str(include_str!("../testdata/synthetic-motmetrics.json")).unwrap();
+    let want = |k: &str| reference[k].as_f64().unwrap();
+    let r = evaluate(&gt, &pred, &EvalConfig::default()).unwrap();
+    let c = &r.clear;
+    assert_eq!(c.true_positives as f64, want("num_detections"));
+    assert_eq!(c.false_positives as f64, want("num_false_positives"));
+    assert_eq!(c.false_negatives as f64, want("num_misses"));
+    assert_eq!(c.id_switches as f64, want("num_switches"));
+    assert_eq!(
+        (c.true_positives + c.false_negatives) as f64,
+        want("num_objects")
+    );
+    assert_relative_eq!(c.mota, want("mota"), epsilon = 1e-12);
+    // py-motmetrics reports MOTP as the mean distance 1 − IoU.
+    assert_relative_eq!(1.0 - c.motp, want("motp"), epsilon = 1e-9);
+    assert_relative_eq!(c.precision, want("precision"), epsilon = 1e-12);
+    assert_relative_eq!(c.recall, want("recall"), epsilon = 1e-12);
+    let i = &r.identity;
+    assert_eq!(
+        (i.idtp as f64, i.idfp as f64, i.idfn as f64),
+        (want("idtp"), want("idfp"), want("idfn"))
+    );
+    assert_relative_eq!(i.idf1, want("idf1"), epsilon = 1e-12);
+    assert_relative_eq!(i.idp, want("idp"), epsilon = 1e-12);
+    assert_relative_eq!(i.idr, want("idr"), epsilon = 1e-12);
+}
+
+#[test]
+fn sparse_frame_numbers_group_like_dense_ones() {
+    // Frames 1 and 2 use the bucket path; frames 1 and 10⁷ the sort path. The per-frame
+    // similarity matrices must be the same.
+    let dense = boxes(&[(1, &[(1, 0.0), (2, 3.0)]), (2, &[(2, 50.0)])]);
+    let sparse = boxes(&[
+        (1, &[(1, 0.0), (10_000_000, 3.0)]),
+        (2, &[(10_000_000, 50.0)]),
+    ]);
+    let pred_dense = boxes(&[(5, &[(1, 1.0), (2, 4.0)]), (6, &[(2, 52.0)])]);
+    let pred_sparse = boxes(&[
+        (5, &[(1, 1.0), (10_000_000, 4.0)]),
+        (6, &[(10_000_000, 52.0)]),
+    ]);
+    let a = Sequence::new(&dense, &pred_dense, Similarity::Iou).unwrap();
+    let b = Sequence::new(&sparse, &pred_sparse, Similarity::Iou).unwrap();
+    assert_eq!(a.frames.len(), b.frames.len());
+    for (fa, fb) in a.frames.iter().zip(&b.frames) {
+        assert_eq!(
+            (&fa.gt, &fa.pred, &fa.sim, &fa.pair),
+            (&fb.gt, &fb.pred, &fb.sim, &fb.pair)
+        );
+    }
 }

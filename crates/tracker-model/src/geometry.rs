@@ -152,26 +152,31 @@ impl BoundingBox {
     }
 
     /// The centre point.
+    #[inline]
     pub fn centre(&self) -> Point2 {
         Point2::new(self.left + self.width / 2.0, self.top + self.height / 2.0)
     }
 
     /// x of the right edge.
+    #[inline]
     pub fn right(&self) -> f64 {
         self.left + self.width
     }
 
     /// y of the bottom edge.
+    #[inline]
     pub fn bottom(&self) -> f64 {
         self.top + self.height
     }
 
     /// Area.
+    #[inline]
     pub fn area(&self) -> f64 {
         self.width * self.height
     }
 
     /// Area of the intersection with `other` (0 when disjoint or touching).
+    #[inline]
     pub fn intersection_area(&self, other: &Self) -> f64 {
         let w = (self.right().min(other.right()) - self.left.max(other.left)).max(0.0);
         let h = (self.bottom().min(other.bottom()) - self.top.max(other.top)).max(0.0);
@@ -180,6 +185,7 @@ impl BoundingBox {
 
     /// Intersection over union in [0, 1]; two zero-area boxes have IoU 0, even when identical,
     /// because a degenerate box carries no extent to overlap.
+    #[inline]
     pub fn iou(&self, other: &Self) -> f64 {
         let inter = self.intersection_area(other);
         let union = self.area() + other.area() - inter;

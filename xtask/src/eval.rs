@@ -1,0 +1,105 @@
+//! `cargo xtask eval --gt GT.txt --pred PRED.txt`: scores a tracker's MOTChallenge output
+//! against MOTChallenge ground truth with every sequence-level metric of eval-metrics.
+
+use std::fs::File;
+use std::io::BufReader;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use eval_metrics::{EvalConfig, EvalReport, MatchConfig, evaluate};
+use tracker_model::{MotRow, TrackSet, parse_mot};
+
+use crate::Outcome;
+use crate::report::{Table, fmt_num};
+
+/// Reads a MOTChallenge file; errors name the file and line.
+fn read_rows(path: &Path) -> Result<Vec<MotRow>> {
+    let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    parse_mot(BufReader::new(file))
+        .with_context(|| format!("{} is not a valid MOTChallenge file", path.display()))
+}
+
+/// Ground truth rows with confidence 0 are "ignore" annotations in MOTChallenge and are
+/// dropped, as TrackEval does before matching (its distractor-class handling is not applied).
+fn load(gt: &Path, pred: &Path) -> Result<(TrackSet, TrackSet)> {
+    let gt_rows: Vec<MotRow> = read_rows(gt)?
+        .into_iter()
+        .filter(|r| r.confidence != 0.0)
+        .collect();
+    let gt_set =
+        TrackSet::from_mot_rows(&gt_rows).with_context(|| format!("in {}", gt.display()))?;
+    let pred_set = TrackSet::from_mot_rows(&read_rows(pred)?)
+        .with_context(|| format!("in {}", pred.display()))?;
+    Ok((gt_set, pred_set))
+}
+
+/// The report as (metric, value) rows, in the order the table shows them.
+fn rows(r: &EvalReport) -> Vec<(&'static str, String)> {
+    let c = &r.clear;
+    let h = &r.hota;
+    let i = &r.identity;
+    let count = |v: usize| v.to_string();
+    vec![
+        ("HOTA", fmt_num(h.hota)),
+        ("DetA", fmt_num(h.det_a)),
+        ("AssA", fmt_num(h.ass_a)),
+        ("LocA", fmt_num(h.loc_a)),
+        ("DetRe", fmt_num(h.det_re)),
+        ("DetPr", fmt_num(h.det_pr)),
+        ("AssRe", fmt_num(h.ass_re)),
+        ("AssPr", fmt_num(h.ass_pr)),
+        ("MOTA", fmt_num(c.mota)),
+        ("MOTP (mean IoU of matches)", fmt_num(c.motp)),
+        ("MODA", fmt_num(c.moda)),
+        ("Recall", fmt_num(c.recall)),
+        ("Precision", fmt_num(c.precision)),
+        ("TP", count(c.true_positives)),
+        ("FP", count(c.false_positives)),
+        ("FN", count(c.false_negatives)),
+        ("IDSW", count(c.id_switches)),
+        ("Frag", count(c.fragmentations)),
+        ("MT", count(c.mostly_tracked)),
+        ("PT", count(c.partially_tracked)),
+        ("ML", count(c.mostly_lost)),
+        ("IDF1", fmt_num(i.idf1)),
+        ("IDP", fmt_num(i.idp)),
+        ("IDR", fmt_num(i.idr)),
+        ("IDTP", count(i.idtp)),
+        ("IDFP", count(i.idfp)),
+        ("IDFN", count(i.idfn)),
+        ("SR", fmt_num(r.success.success_rate)),
+        ("FAF", fmt_num(r.success.false_alarms_per_frame)),
+    ]
+}
+
+/// Runs the evaluation and prints a table or JSON.
+#[expect(
+    clippy::print_stdout,
+    reason = "the evaluation is printed on the terminal"
+)]
+pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool) -> Outcome {
+    let (gt_set, pred_set) = load(gt, pred)?;
+    let config = EvalConfig {
+        matching: MatchConfig::iou(iou),
+    };
+    let report = evaluate(&gt_set, &pred_set, &config).context("evaluation failed")?;
+    if json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        let mut table = Table::new(
+            &format!(
+                "{} against {} (IoU ≥ {iou}; {} truth tracks, {} estimated tracks)",
+                pred.display(),
+                gt.display(),
+                gt_set.len(),
+                pred_set.len()
+            ),
+            &["metric", "value"],
+        );
+        for (name, value) in rows(&report) {
+            table.row(vec![name.to_string(), value]);
+        }
+        println!("{}", table.to_markdown());
+    }
+    Ok(true)
+}
