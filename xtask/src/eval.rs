@@ -103,3 +103,30 @@ pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool) -> Outcome {
     }
     Ok(true)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn malformed_files_name_the_file_and_line() {
+        let dir = std::env::temp_dir().join(format!("xtask-eval-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let gt = dir.join("gt.txt");
+        let bad = dir.join("bad.txt");
+        std::fs::write(&gt, "1,1,0,0,10,10,1,-1,-1,-1\n").unwrap();
+        std::fs::write(&bad, "1,1,0,0,10,10\n\n2,1,0,0,ten,10\n").unwrap();
+        let err = format!("{:#}", load(&gt, &bad).unwrap_err());
+        assert!(
+            err.contains("bad.txt") && err.contains("line 3") && err.contains("width"),
+            "{err}"
+        );
+        let missing = format!("{:#}", load(&dir.join("nope.txt"), &gt).unwrap_err());
+        assert!(missing.contains("nope.txt"), "{missing}");
+        // A valid pair evaluates, and ignored ground truth (confidence 0) is dropped.
+        std::fs::write(&bad, "1,1,0,0,10,10,1\n1,2,50,0,10,10,0\n").unwrap();
+        let (g, _) = load(&bad, &gt).unwrap();
+        assert_eq!(g.n_points(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
