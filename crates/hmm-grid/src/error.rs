@@ -1,0 +1,58 @@
+//! The error type of hmm-grid.
+
+/// What can go wrong building or using a hidden Markov model.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Error {
+    /// An error from the shared model.
+    #[error(transparent)]
+    Model(#[from] tracker_model::Error),
+    /// A probability vector or matrix row is invalid.
+    #[error("{what} row {row}: {reason}")]
+    InvalidRow {
+        /// Which parameter ("initial distribution", "transition matrix", "emission matrix").
+        what: &'static str,
+        /// The row (0 for the initial distribution).
+        row: usize,
+        /// What is wrong, with the values.
+        reason: String,
+    },
+    /// Sizes that do not fit together.
+    #[error("shape mismatch: {0}")]
+    Shape(String),
+    /// An observation symbol outside 0..M.
+    #[error(
+        "observation {index} of sequence {sequence} is symbol {symbol}, but the model has {n_symbols} symbols"
+    )]
+    SymbolOutOfRange {
+        /// Which sequence (0 for a single one).
+        sequence: usize,
+        /// Position in the sequence.
+        index: usize,
+        /// The symbol.
+        symbol: usize,
+        /// M.
+        n_symbols: usize,
+    },
+    /// An empty input where data is needed.
+    #[error("{0} is empty")]
+    Empty(&'static str),
+    /// The observations have probability zero under the model (every path is impossible).
+    #[error("observation {index} of sequence {sequence} has probability 0 under the model")]
+    ImpossibleObservation {
+        /// Which sequence.
+        sequence: usize,
+        /// Position of the first impossible observation.
+        index: usize,
+    },
+    /// A configuration value out of range.
+    #[error("invalid {name}: {reason}")]
+    InvalidParameter {
+        /// The parameter.
+        name: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
+}
+
+/// Result with hmm-grid's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,264 @@
+//! Baum-Welch re-estimation over several observation sequences (seed 002 eq. 12; Rabiner 1989
+//! §V.B for multiple sequences), with frozen components, pseudo-counts and a parallel E-step.
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::inference::{accumulate_xi, backward, forward_in};
+use crate::model::Hmm;
+
+/// Which parts of λ stay fixed during training; frozen parts come out bit-identical.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Freeze {
+    /// Keep π.
+    pub initial: bool,
+    /// Keep A.
+    pub transitions: bool,
+    /// Keep B.
+    pub emissions: bool,
+}
+
+/// Dirichlet pseudo-counts added to the expected counts before normalising (MAP estimation).
+/// Transition pseudo-counts go only to transitions the model allows (a_ij > 0), so kinematic
+/// constraints survive training; initial and emission pseudo-counts smooth every entry.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+pub struct PseudoCounts {
+    /// Added to each π_i count.
+    pub initial: f64,
+    /// Added to each allowed a_ij count.
+    pub transitions: f64,
+    /// Added to each b_i(m) count.
+    pub emissions: f64,
+}
+
+/// Baum-Welch settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BaumWelchConfig {
+    /// Upper bound on re-estimation steps.
+    pub max_iterations: usize,
+    /// Stop when the total log-likelihood improves by less than this (absolute).
+    pub tolerance: f64,
+    /// Frozen components.
+    pub freeze: Freeze,
+    /// Pseudo-counts.
+    pub pseudo_counts: PseudoCounts,
+}
+
+impl Default for BaumWelchConfig {
+    fn default() -> Self {
+        Self {
+            max_iterations: 100,
+            tolerance: 1e-6,
+            freeze: Freeze::default(),
+            pseudo_counts: PseudoCounts::default(),
+        }
+    }
+}
+
+impl BaumWelchConfig {
+    fn check(&self) -> Result<()> {
+        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
+            return Err(Error::InvalidParameter {
+                name: "tolerance",
+                reason: format!("{} must be finite and >= 0", self.tolerance),
+            });
+        }
+        let pc = self.pseudo_counts;
+        for (v, name) in [
+            (pc.initial, "initial pseudo-count"),
+            (pc.transitions, "transition pseudo-count"),
+            (pc.emissions, "emission pseudo-count"),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::InvalidParameter {
+                    name,
+                    reason: format!("{v} must be finite and >= 0"),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// How training went.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FitReport {
+    /// Total log-likelihood of the training sequences under each successive model, the initial
+    /// one first and the returned one last.
+    pub log_likelihoods: Vec<f64>,
+    /// Whether the improvement fell below the tolerance before `max_iterations`.
+    pub converged: bool,
+}
+
+/// Expected counts of one sequence (the E-step), or of several summed.
+#[derive(Debug, Clone)]
+struct Stats {
+    log_likelihood: f64,
+    /// γ_1(i).
+    initial: Vec<f64>,
+    /// Σ_t ξ_t per stored transition entry.
+    xi: Vec<f64>,
+    /// Σ_t γ_t(i) [o_t = m], row-major N × M.
+    emissions: Vec<f64>,
+}
+
+impl Stats {
+    fn zeros(hmm: &Hmm) -> Self {
+        Self {
+            log_likelihood: 0.0,
+            initial: vec![0.0; hmm.n_states()],
+            xi: vec![0.0; hmm.transitions().n_stored()],
+            emissions: vec![0.0; hmm.n_states() * hmm.n_symbols()],
+        }
+    }
+
+    fn add(&mut self, o: &Stats) {
+        self.log_likelihood += o.log_likelihood;
+        for (a, b) in [
+            (&mut self.initial, &o.initial),
+            (&mut self.xi, &o.xi),
+            (&mut self.emissions, &o.emissions),
+        ] {
+            a.iter_mut().zip(b).for_each(|(x, y)| *x += y);
+        }
+    }
+}
+
+fn e_step(hmm: &Hmm, obs: &[usize], sequence: usize) -> Result<Stats> {
+    let n = hmm.n_states();
+    let m = hmm.n_symbols();
+    let f = forward_in(hmm, obs, sequence)?;
+    let beta = backward(hmm, obs, &f.scale)?;
+    let mut s = Stats::zeros(hmm);
+    s.log_likelihood = f.log_likelihood;
+    accumulate_xi(hmm, obs, &f, &beta, &mut s.xi);
+    for (t, &o) in obs.iter().enumerate() {
+        for i in 0..n {
+            let g = f.alpha[t * n + i] * beta[t * n + i];
+            if t == 0 {
+                s.initial[i] = g;
+            }
+            s.emissions[i * m + o] += g;
+        }
+    }
+    Ok(s)
+}
+
+/// Sums the E-step over all sequences: in parallel, then reduced in sequence order so the
+/// result does not depend on the number of threads.
+fn expected_counts(hmm: &Hmm, sequences: &[Vec<usize>]) -> Result<Stats> {
+    let per_sequence: Vec<Stats> = sequences
+        .par_iter()
+        .enumerate()
+        .map(|(k, obs)| e_step(hmm, obs, k))
+        .collect::<Result<_>>()?;
+    let mut total = Stats::zeros(hmm);
+    per_sequence.iter().for_each(|s| total.add(s));
+    Ok(total)
+}
+
+/// Normalises `counts + pseudo` (pseudo only where `allowed`) into a probability row; a row with
+/// no evidence keeps `old`.
+fn renormalise(counts: &[f64], old: &[f64], pseudo: f64, only_allowed: bool) -> Vec<f64> {
+    let padded: Vec<f64> = counts
+        .iter()
+        .zip(old)
+        .map(|(c, o)| {
+            if only_allowed && *o == 0.0 {
+                0.0
+            } else {
+                c + pseudo
+            }
+        })
+        .collect();
+    let total: f64 = padded.iter().sum();
+    if total > 0.0 {
+        padded.iter().map(|v| v / total).collect()
+    } else {
+        old.to_vec()
+    }
+}
+
+fn m_step(hmm: &Hmm, stats: &Stats, cfg: &BaumWelchConfig) -> Result<Hmm> {
+    let n = hmm.n_states();
+    let m = hmm.n_symbols();
+    let pc = cfg.pseudo_counts;
+    let initial = if cfg.freeze.initial {
+        hmm.initial().to_vec()
+    } else {
+        renormalise(&stats.initial, hmm.initial(), pc.initial, false)
+    };
+    let transitions = if cfg.freeze.transitions {
+        hmm.transitions().clone()
+    } else {
+        let a = hmm.transitions();
+        let mut values = a.values().to_vec();
+        for i in 0..n {
+            let range = a.row_range(i);
+            let row = renormalise(
+                &stats.xi[range.clone()],
+                &a.values()[range.clone()],
+                pc.transitions,
+                true,
+            );
+            values[range].copy_from_slice(&row);
+        }
+        a.with_values(values)?
+    };
+    let emissions = if cfg.freeze.emissions {
+        hmm.emissions().to_vec()
+    } else {
+        let mut out = Vec::with_capacity(n * m);
+        for i in 0..n {
+            out.extend(renormalise(
+                &stats.emissions[i * m..(i + 1) * m],
+                &hmm.emissions()[i * m..(i + 1) * m],
+                pc.emissions,
+                false,
+            ));
+        }
+        out
+    };
+    Hmm::new(initial, transitions, emissions, m)
+}
+
+/// Trains `hmm` on `sequences` by Baum-Welch and returns the trained model with the
+/// log-likelihood history. Without pseudo-counts the history never decreases (EM).
+pub fn baum_welch(
+    hmm: &Hmm,
+    sequences: &[Vec<usize>],
+    config: &BaumWelchConfig,
+) -> Result<(Hmm, FitReport)> {
+    config.check()?;
+    if sequences.is_empty() {
+        return Err(Error::Empty("training sequences"));
+    }
+    for (k, obs) in sequences.iter().enumerate() {
+        hmm.check_observations(obs, k)?;
+    }
+    let mut model = hmm.clone();
+    let mut history = Vec::new();
+    let mut stats = expected_counts(&model, sequences)?;
+    history.push(stats.log_likelihood);
+    let mut converged = false;
+    for _ in 0..config.max_iterations {
+        let next = m_step(&model, &stats, config)?;
+        let next_stats = expected_counts(&next, sequences)?;
+        let gain = next_stats.log_likelihood - stats.log_likelihood;
+        model = next;
+        stats = next_stats;
+        history.push(stats.log_likelihood);
+        if gain.abs() < config.tolerance {
+            converged = true;
+            break;
+        }
+    }
+    Ok((
+        model,
+        FitReport {
+            log_likelihoods: history,
+            converged,
+        },
+    ))
+}

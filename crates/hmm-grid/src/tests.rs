@@ -1,0 +1,465 @@
+//! Brute-force enumeration of every state path on tiny models, agreement between the scaled,
+//! log-space, dense and sparse formulations, Baum-Welch monotonicity and freezing, a very long
+//! sequence, and error cases.
+
+use approx::assert_relative_eq;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use tracker_model::Point2;
+
+use crate::*;
+
+fn random_row(len: usize, zeros: &[usize], rng: &mut ChaCha8Rng) -> Vec<f64> {
+    let mut row: Vec<f64> = (0..len)
+        .map(|j| {
+            if zeros.contains(&j) {
+                0.0
+            } else {
+                rng.random_range(0.05..1.0)
+            }
+        })
+        .collect();
+    let s: f64 = row.iter().sum();
+    row.iter_mut().for_each(|v| *v /= s);
+    row
+}
+
+/// A random model; `sparse` zeroes one transition per row so both storages are exercised.
+fn random_hmm(n: usize, m: usize, sparse: bool, seed: u64) -> Hmm {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let a: Vec<f64> = (0..n)
+        .flat_map(|i| {
+            let zeros = if sparse { vec![(i + 1) % n] } else { vec![] };
+            random_row(n, &zeros, &mut rng)
+        })
+        .collect();
+    let b: Vec<f64> = (0..n).flat_map(|_| random_row(m, &[], &mut rng)).collect();
+    let pi = random_row(n, &[], &mut rng);
+    Hmm::new(pi, Transitions::dense(n, a).unwrap(), b, m).unwrap()
+}
+
+/// P(Q, O | λ) for every path Q, by enumeration.
+fn all_paths(hmm: &Hmm, obs: &[usize]) -> Vec<(Vec<usize>, f64)> {
+    let n = hmm.n_states();
+    let len = obs.len();
+    let mut out = Vec::new();
+    for code in 0..n.pow(len as u32) {
+        let path: Vec<usize> = (0..len).map(|t| (code / n.pow(t as u32)) % n).collect();
+        let mut p = hmm.initial()[path[0]] * hmm.emission(path[0], obs[0]);
+        for t in 1..len {
+            p *= hmm.transitions().get(path[t - 1], path[t]) * hmm.emission(path[t], obs[t]);
+        }
+        out.push((path, p));
+    }
+    out
+}
+
+#[test]
+fn forward_posterior_viterbi_and_xi_match_brute_force() {
+    for (seed, sparse) in [(1, false), (2, true), (3, false), (4, true)] {
+        let hmm = random_hmm(3, 2, sparse, seed);
+        let obs = [0, 1, 1, 0, 1, 0];
+        let paths = all_paths(&hmm, &obs);
+        let total: f64 = paths.iter().map(|p| p.1).sum();
+        let f = forward(&hmm, &obs).unwrap();
+        assert!(
+            (f.log_likelihood - total.ln()).abs() < 1e-12,
+            "log-likelihood"
+        );
+        let post = posterior(&hmm, &obs).unwrap();
+        for t in 0..obs.len() {
+            for i in 0..3 {
+                let brute: f64 = paths
+                    .iter()
+                    .filter(|p| p.0[t] == i)
+                    .map(|p| p.1)
+                    .sum::<f64>()
+                    / total;
+                assert!((post.at(t)[i] - brute).abs() < 1e-12, "gamma t={t} i={i}");
+            }
+        }
+        let (best_path, best_p) = paths.iter().fold((vec![], 0.0), |acc, p| {
+            if p.1 > acc.1 { (p.0.clone(), p.1) } else { acc }
+        });
+        let (path, log_p) = viterbi(&hmm, &obs).unwrap();
+        assert_eq!(path, best_path);
+        assert!((log_p - best_p.ln()).abs() < 1e-12);
+        let xi = expected_transitions(&hmm, &obs).unwrap();
+        for i in 0..3 {
+            for j in 0..3 {
+                let brute: f64 = paths
+                    .iter()
+                    .map(|p| p.0.windows(2).filter(|w| w[0] == i && w[1] == j).count() as f64 * p.1)
+                    .sum::<f64>()
+                    / total;
+                assert!((xi[i * 3 + j] - brute).abs() < 1e-12, "xi {i}->{j}");
+            }
+        }
+        // Posterior decoding picks the per-step argmax of the brute-force marginals.
+        let decoded = posterior_decode(&hmm, &obs).unwrap();
+        for (t, &s) in decoded.iter().enumerate() {
+            let g = post.at(t);
+            assert!(g.iter().all(|&v| v <= g[s]));
+        }
+    }
+}
+
+#[test]
+fn scaled_and_log_space_forward_agree() {
+    let hmm = random_hmm(5, 4, false, 9);
+    let mut rng = ChaCha8Rng::seed_from_u64(10);
+    let (_, obs) = hmm.sample(200, &mut rng);
+    let f = forward(&hmm, &obs).unwrap();
+    let (log_alpha, ll) = forward_log(&hmm, &obs).unwrap();
+    assert_relative_eq!(f.log_likelihood, ll, max_relative = 1e-12);
+    for t in 0..obs.len() {
+        let row = &log_alpha[t * 5..(t + 1) * 5];
+        let max = row.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let norm: f64 = row.iter().map(|v| (v - max).exp()).sum();
+        for i in 0..5 {
+            assert!(((row[i] - max).exp() / norm - f.alpha[t * 5 + i]).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn sparse_and_dense_paths_agree() {
+    let grid = CellGrid {
+        n_cols: 6,
+        n_rows: 5,
+        cell_size: 1.0,
+        blocked: vec![(2, 2), (3, 2)],
+    };
+    let space = StateSpace::from_grid(&grid).unwrap();
+    let a = space
+        .transitions(&SpeedDistribution::new(vec![0.3, 0.6, 0.1]).unwrap())
+        .unwrap();
+    let sensors = SensorModel {
+        sensors: vec![Point2::new(0.0, 0.0)],
+        base_sigma: 0.7,
+        sigma_per_distance: 0.1,
+    };
+    let n = space.n_states();
+    let mut pi = vec![0.0; n];
+    pi[0] = 1.0;
+    let sparse = Hmm::new(pi, a, space.sensor_emissions(&sensors).unwrap(), n).unwrap();
+    assert!(sparse.transitions().is_sparse());
+    let dense = sparse.with_transition_storage(false);
+    assert!(!dense.transitions().is_sparse());
+    let (_, obs) = sparse.sample(300, &mut ChaCha8Rng::seed_from_u64(3));
+    let (fs, fd) = (
+        forward(&sparse, &obs).unwrap(),
+        forward(&dense, &obs).unwrap(),
+    );
+    assert!((fs.log_likelihood - fd.log_likelihood).abs() < 1e-12 * fs.log_likelihood.abs());
+    let (ps, pd) = (
+        posterior(&sparse, &obs).unwrap(),
+        posterior(&dense, &obs).unwrap(),
+    );
+    assert!(
+        ps.gamma
+            .iter()
+            .zip(&pd.gamma)
+            .all(|(a, b)| (a - b).abs() < 1e-12)
+    );
+    let (xs, xd) = (
+        expected_transitions(&sparse, &obs).unwrap(),
+        expected_transitions(&dense, &obs).unwrap(),
+    );
+    assert!(xs.iter().zip(&xd).all(|(a, b)| (a - b).abs() < 1e-12));
+    let (vs, vd) = (
+        viterbi(&sparse, &obs).unwrap(),
+        viterbi(&dense, &obs).unwrap(),
+    );
+    assert_eq!(vs.0, vd.0);
+    assert!((vs.1 - vd.1).abs() < 1e-12 * vs.1.abs());
+    // Automatic choice: a 20×20 grid's stay-or-step matrix (≤ 5 of 400 entries per row) given
+    // densely is stored sparse; a full matrix stays dense.
+    let big = StateSpace::from_grid(&CellGrid {
+        n_cols: 20,
+        n_rows: 20,
+        cell_size: 1.0,
+        blocked: vec![],
+    })
+    .unwrap();
+    let values = big
+        .transitions(&SpeedDistribution::new(vec![0.2, 0.8]).unwrap())
+        .unwrap()
+        .dense_values();
+    assert!(Transitions::from_dense(400, values).unwrap().is_sparse());
+    assert!(
+        !Transitions::from_dense(2, vec![0.5, 0.5, 0.5, 0.5])
+            .unwrap()
+            .is_sparse()
+    );
+}
+
+fn training_data(truth: &Hmm, k: usize, len: usize, seed: u64) -> Vec<Vec<usize>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..k).map(|_| truth.sample(len, &mut rng).1).collect()
+}
+
+#[test]
+fn baum_welch_never_decreases_the_likelihood() {
+    let truth = random_hmm(4, 3, true, 21);
+    let start = random_hmm(4, 3, true, 22);
+    let data = training_data(&truth, 8, 120, 5);
+    let cfg = BaumWelchConfig {
+        max_iterations: 60,
+        tolerance: 0.0,
+        ..BaumWelchConfig::default()
+    };
+    let (_, report) = baum_welch(&start, &data, &cfg).unwrap();
+    assert_eq!(report.log_likelihoods.len(), 61);
+    for w in report.log_likelihoods.windows(2) {
+        assert!(
+            w[1] >= w[0] - 1e-9 * w[0].abs(),
+            "log-likelihood fell from {} to {}",
+            w[0],
+            w[1]
+        );
+    }
+    assert!(report.log_likelihoods.last().unwrap() > &report.log_likelihoods[0]);
+}
+
+#[test]
+fn frozen_components_stay_bit_identical() {
+    let start = random_hmm(4, 3, false, 30);
+    let data = training_data(&random_hmm(4, 3, false, 31), 5, 80, 6);
+    for freeze in [
+        Freeze {
+            initial: true,
+            ..Freeze::default()
+        },
+        Freeze {
+            transitions: true,
+            ..Freeze::default()
+        },
+        Freeze {
+            emissions: true,
+            ..Freeze::default()
+        },
+    ] {
+        let cfg = BaumWelchConfig {
+            max_iterations: 10,
+            freeze,
+            pseudo_counts: PseudoCounts {
+                initial: 0.5,
+                transitions: 0.5,
+                emissions: 0.5,
+            },
+            ..BaumWelchConfig::default()
+        };
+        let (trained, _) = baum_welch(&start, &data, &cfg).unwrap();
+        assert_eq!(freeze.initial, trained.initial() == start.initial());
+        assert_eq!(
+            freeze.transitions,
+            trained.transitions() == start.transitions()
+        );
+        assert_eq!(freeze.emissions, trained.emissions() == start.emissions());
+    }
+}
+
+#[test]
+fn structural_zeros_survive_training_with_pseudo_counts() {
+    let start = random_hmm(4, 3, true, 40);
+    let data = training_data(&random_hmm(4, 3, false, 41), 5, 80, 7);
+    let cfg = BaumWelchConfig {
+        max_iterations: 5,
+        pseudo_counts: PseudoCounts {
+            transitions: 1.0,
+            ..PseudoCounts::default()
+        },
+        ..BaumWelchConfig::default()
+    };
+    let (trained, _) = baum_welch(&start, &data, &cfg).unwrap();
+    for i in 0..4 {
+        assert_eq!(trained.transitions().get(i, (i + 1) % 4), 0.0);
+    }
+}
+
+#[test]
+fn baum_welch_is_independent_of_thread_count() {
+    let start = random_hmm(5, 4, false, 50);
+    let data = training_data(&random_hmm(5, 4, false, 51), 12, 60, 8);
+    let cfg = BaumWelchConfig {
+        max_iterations: 5,
+        ..BaumWelchConfig::default()
+    };
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| baum_welch(&start, &data, &cfg).unwrap())
+    };
+    let (one, two) = (run(1), run(2));
+    assert!(one.0 == two.0 && one.1 == two.1);
+}
+
+#[test]
+fn a_million_steps_neither_underflow_nor_overflow() {
+    let hmm = random_hmm(3, 2, false, 60);
+    let (states, obs) = hmm.sample(1_000_000, &mut ChaCha8Rng::seed_from_u64(61));
+    let f = forward(&hmm, &obs).unwrap();
+    assert!(f.log_likelihood.is_finite() && f.log_likelihood < -1e5);
+    let post = posterior(&hmm, &obs).unwrap();
+    assert!(post.gamma.iter().all(|g| g.is_finite() && *g >= 0.0));
+    assert!((post.at(999_999).iter().sum::<f64>() - 1.0).abs() < 1e-9);
+    let (path, log_p) = viterbi(&hmm, &obs).unwrap();
+    assert!(log_p.is_finite() && log_p < f.log_likelihood);
+    // The decoded path is informative: it agrees with the truth more often than chance.
+    let agree = path.iter().zip(&states).filter(|(a, b)| a == b).count();
+    assert!(agree > 400_000, "{agree}");
+}
+
+#[test]
+fn invalid_models_and_observations_are_clear_errors() {
+    let a = || Transitions::dense(2, vec![0.5, 0.5, 0.5, 0.5]).unwrap();
+    assert!(matches!(
+        Transitions::dense(2, vec![0.5, 0.5, 0.4, 0.5]),
+        Err(Error::InvalidRow {
+            what: "transition matrix",
+            row: 1,
+            ..
+        })
+    ));
+    assert!(matches!(
+        Transitions::dense(2, vec![1.5, -0.5, 0.5, 0.5]),
+        Err(Error::InvalidRow { row: 0, .. })
+    ));
+    assert!(matches!(
+        Transitions::dense(2, vec![f64::NAN, 1.0, 0.5, 0.5]),
+        Err(Error::InvalidRow { row: 0, .. })
+    ));
+    assert!(matches!(
+        Transitions::dense(2, vec![1.0; 3]),
+        Err(Error::Shape(_))
+    ));
+    assert!(matches!(
+        Transitions::sparse(vec![vec![(0, 1.0)], vec![(5, 1.0)]]),
+        Err(Error::InvalidRow { row: 1, .. })
+    ));
+    assert!(matches!(
+        Hmm::new(vec![0.5, 0.6], a(), vec![1.0, 0.0, 0.0, 1.0], 2),
+        Err(Error::InvalidRow {
+            what: "initial distribution",
+            ..
+        })
+    ));
+    assert!(matches!(
+        Hmm::new(vec![0.5, 0.5], a(), vec![1.0, 0.0, 0.3, 0.3], 2),
+        Err(Error::InvalidRow {
+            what: "emission matrix",
+            row: 1,
+            ..
+        })
+    ));
+    assert!(matches!(
+        Hmm::new(vec![1.0], a(), vec![1.0, 0.0, 0.0, 1.0], 2),
+        Err(Error::Shape(_))
+    ));
+    let hmm = Hmm::new(vec![1.0, 0.0], a(), vec![1.0, 0.0, 1.0, 0.0], 2).unwrap();
+    assert_eq!(
+        forward(&hmm, &[0, 2]).unwrap_err(),
+        Error::SymbolOutOfRange {
+            sequence: 0,
+            index: 1,
+            symbol: 2,
+            n_symbols: 2
+        }
+    );
+    assert_eq!(
+        forward(&hmm, &[]).unwrap_err(),
+        Error::Empty("observation sequence")
+    );
+    // Symbol 1 can never be emitted.
+    assert_eq!(
+        forward(&hmm, &[0, 1]).unwrap_err(),
+        Error::ImpossibleObservation {
+            sequence: 0,
+            index: 1
+        }
+    );
+    assert!(matches!(
+        viterbi(&hmm, &[1]),
+        Err(Error::ImpossibleObservation { .. })
+    ));
+    assert!(matches!(
+        baum_welch(&hmm, &[vec![0], vec![0, 3]], &BaumWelchConfig::default()),
+        Err(Error::SymbolOutOfRange { sequence: 1, .. })
+    ));
+    assert!(baum_welch(&hmm, &[], &BaumWelchConfig::default()).is_err());
+    let bad = BaumWelchConfig {
+        pseudo_counts: PseudoCounts {
+            emissions: -1.0,
+            ..PseudoCounts::default()
+        },
+        ..BaumWelchConfig::default()
+    };
+    assert!(baum_welch(&hmm, &[vec![0]], &bad).is_err());
+}
+
+#[test]
+fn maps_build_valid_models() {
+    let grid = CellGrid {
+        n_cols: 3,
+        n_rows: 3,
+        cell_size: 10.0,
+        blocked: vec![(1, 1)],
+    };
+    let space = StateSpace::from_grid(&grid).unwrap();
+    assert_eq!(space.n_states(), 8);
+    assert_eq!(space.state_of_cell(1, 1, 3), None);
+    let corner = space.state_of_cell(0, 0, 3).unwrap();
+    assert_eq!(space.neighbours(corner).len(), 2);
+    assert_eq!(space.position(corner), Point2::new(5.0, 5.0));
+    // Stay 0.2, one hop 0.8 split over the two neighbours.
+    let a = space
+        .transitions(&SpeedDistribution::new(vec![0.2, 0.8]).unwrap())
+        .unwrap();
+    assert_relative_eq!(a.get(corner, corner), 0.2);
+    assert_relative_eq!(a.get(corner, space.state_of_cell(1, 0, 3).unwrap()), 0.4);
+    assert_eq!(a.get(corner, space.state_of_cell(2, 2, 3).unwrap()), 0.0);
+    let road = StateSpace::from_road_graph(
+        vec![
+            Point2::new(0.0, 0.0),
+            Point2::new(1.0, 0.0),
+            Point2::new(2.0, 0.0),
+        ],
+        &[(0, 1), (1, 2)],
+    )
+    .unwrap();
+    // A dead end cannot move two hops: that speed's share goes to the possible ones.
+    let a = road
+        .transitions(&SpeedDistribution::new(vec![0.5, 0.25, 0.25]).unwrap())
+        .unwrap();
+    assert_relative_eq!(a.get(1, 1), 0.5 / 0.75);
+    assert_relative_eq!(a.get(0, 2), 0.25);
+    let b = road
+        .sensor_emissions(&SensorModel {
+            sensors: vec![Point2::new(0.0, 0.0)],
+            base_sigma: 0.5,
+            sigma_per_distance: 0.5,
+        })
+        .unwrap();
+    for i in 0..3 {
+        assert!(
+            (0..3).all(|m| b[i * 3 + m] <= b[i * 3 + i]),
+            "diagonal dominates row {i}"
+        );
+    }
+    // Accuracy falls with distance from the sensor.
+    assert!(b[0] > b[2 * 3 + 2]);
+    assert!(StateSpace::from_road_graph(vec![Point2::new(0.0, 0.0)], &[(0, 1)]).is_err());
+    assert!(
+        StateSpace::from_grid(&CellGrid {
+            n_cols: 2,
+            n_rows: 2,
+            cell_size: 1.0,
+            blocked: vec![(5, 0)]
+        })
+        .is_err()
+    );
+    assert!(SpeedDistribution::new(vec![0.5, 0.6]).is_err());
+}
