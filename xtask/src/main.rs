@@ -38,9 +38,9 @@ enum Command {
     },
     /// Run all scenarios, print each section's tables, and write target/report/.
     Report {
-        /// Output directory.
-        #[arg(long, default_value = "target/report")]
-        out: PathBuf,
+        /// Output directory (default: target/report in the workspace).
+        #[arg(long)]
+        out: Option<PathBuf>,
     },
     /// fmt, clippy, tests, docs, bench build and the scenario suite: what CI runs.
     Ci,
@@ -65,7 +65,9 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
         Command::Scenarios { bless, filter } => scenario::run_suite(filter.as_deref(), bless),
-        Command::Report { out } => report::run(&out),
+        Command::Report { out } => {
+            report::run(&out.unwrap_or_else(|| workspace_root().join("target/report")))
+        }
         Command::Ci => ci::run(),
         Command::Eval {
             gt,

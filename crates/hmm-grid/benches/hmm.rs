@@ -1,1 +1,103 @@
-fn main() {}
+//! HMM benchmarks: a 20×20 grid (400 states, stay + 4 neighbours, sparse), M = 400 symbols,
+//! T = 1000; and a dense N = 400 model of the same size.
+#![expect(clippy::unwrap_used, reason = "benchmarks run on fixed, valid inputs")]
+
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use hmm_grid::{
+    BaumWelchConfig, CellGrid, Hmm, SensorModel, SpeedDistribution, StateSpace, Transitions,
+    baum_welch, posterior, viterbi,
+};
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use tracker_model::Point2;
+
+fn grid_model() -> Hmm {
+    let grid = CellGrid {
+        n_cols: 20,
+        n_rows: 20,
+        cell_size: 1.0,
+        blocked: vec![],
+    };
+    let space = StateSpace::from_grid(&grid).unwrap();
+    let a = space
+        .transitions(&SpeedDistribution::new(vec![0.3, 0.7]).unwrap())
+        .unwrap();
+    let sensors = SensorModel {
+        sensors: vec![Point2::new(5.0, 5.0), Point2::new(15.0, 15.0)],
+        base_sigma: 0.8,
+        sigma_per_distance: 0.1,
+    };
+    let b = space.sensor_emissions(&sensors).unwrap();
+    Hmm::new(vec![1.0 / 400.0; 400], a, b, 400).unwrap()
+}
+
+fn dense_model(rng: &mut ChaCha8Rng) -> Hmm {
+    let row = |rng: &mut ChaCha8Rng| {
+        let r: Vec<f64> = (0..400).map(|_| rng.random_range(0.01..1.0)).collect();
+        let s: f64 = r.iter().sum();
+        r.into_iter().map(|v| v / s).collect::<Vec<f64>>()
+    };
+    let a: Vec<f64> = (0..400).flat_map(|_| row(rng)).collect();
+    let b: Vec<f64> = (0..400).flat_map(|_| row(rng)).collect();
+    Hmm::new(
+        vec![1.0 / 400.0; 400],
+        Transitions::from_dense(400, a).unwrap(),
+        b,
+        400,
+    )
+    .unwrap()
+}
+
+fn bench_hmm(c: &mut Criterion) {
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let grid = grid_model();
+    assert!(grid.transitions().is_sparse());
+    let (_, obs) = grid.sample(1000, &mut rng);
+    c.bench_function("grid400_forward_backward_T1000", |b| {
+        b.iter(|| posterior(&grid, black_box(&obs)).unwrap())
+    });
+    c.bench_function("grid400_viterbi_T1000", |b| {
+        b.iter(|| viterbi(&grid, black_box(&obs)).unwrap())
+    });
+    let one_iteration = BaumWelchConfig {
+        max_iterations: 1,
+        tolerance: 0.0,
+        ..BaumWelchConfig::default()
+    };
+    let seqs = vec![obs.clone()];
+    // baum_welch(max_iterations = k) runs k + 1 E-steps and k M-steps, so one iteration costs
+    // the difference between the k = 3 and k = 2 runs.
+    let two = BaumWelchConfig {
+        max_iterations: 2,
+        tolerance: 0.0,
+        ..BaumWelchConfig::default()
+    };
+    let three = BaumWelchConfig {
+        max_iterations: 3,
+        tolerance: 0.0,
+        ..BaumWelchConfig::default()
+    };
+    c.bench_function("grid400_baum_welch_2_iterations_T1000", |b| {
+        b.iter(|| baum_welch(&grid, black_box(&seqs), &two).unwrap())
+    });
+    c.bench_function("grid400_baum_welch_3_iterations_T1000", |b| {
+        b.iter(|| baum_welch(&grid, black_box(&seqs), &three).unwrap())
+    });
+    c.bench_function("grid400_baum_welch_iteration_T1000", |b| {
+        b.iter(|| baum_welch(&grid, black_box(&seqs), &one_iteration).unwrap())
+    });
+    let dense = dense_model(&mut rng);
+    assert!(!dense.transitions().is_sparse());
+    let (_, obs) = dense.sample(1000, &mut rng);
+    c.bench_function("dense400_forward_backward_T1000", |b| {
+        b.iter(|| posterior(&dense, black_box(&obs)).unwrap())
+    });
+    c.bench_function("dense400_viterbi_T1000", |b| {
+        b.iter(|| viterbi(&dense, black_box(&obs)).unwrap())
+    });
+}
+
+criterion_group!(benches, bench_hmm);
+criterion_main!(benches);

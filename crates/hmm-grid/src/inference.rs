@@ -23,11 +23,27 @@ pub struct Forward {
 
 /// One forward step: `next[j] = b_j(o) Σ_i prev[i] a_ij`, scattered row by row (O(nnz)).
 fn propagate(hmm: &Hmm, prev: &[f64], next: &mut [f64], symbol: usize) {
-    next.iter_mut().for_each(|v| *v = 0.0);
     let a = hmm.transitions();
-    for (i, &p) in prev.iter().enumerate() {
-        if p != 0.0 {
-            a.for_each_in_row(i, |j, aij, _| next[j] += p * aij);
+    let n = prev.len();
+    match a.dense_rows() {
+        // next += p · row i for every i: axpys over contiguous memory.
+        Some(rows) => {
+            next.iter_mut().for_each(|v| *v = 0.0);
+            for (i, &p) in prev.iter().enumerate() {
+                if p != 0.0 {
+                    next.iter_mut()
+                        .zip(&rows[i * n..(i + 1) * n])
+                        .for_each(|(v, aij)| *v += p * aij);
+                }
+            }
+        }
+        // Sparse: gather down each column.
+        None => {
+            for (j, v) in next.iter_mut().enumerate() {
+                let mut s = 0.0;
+                a.for_each_in_column(j, |i, aij, _| s += prev[i] * aij);
+                *v = s;
+            }
         }
     }
     for (v, b) in next.iter_mut().zip(hmm.emission_column(symbol)) {
@@ -77,6 +93,67 @@ pub(crate) fn forward_in(hmm: &Hmm, obs: &[usize], sequence: usize) -> Result<Fo
     })
 }
 
+/// Σ_j row[j] · w[j] with four independent partial sums, so the compiler can vectorise the
+/// loop (a single running sum forces strict left-to-right order). The summation order is fixed,
+/// so the result does not depend on the machine.
+fn dot(row: &[f64], w: &[f64]) -> f64 {
+    let mut acc = [0.0; 4];
+    let (rc, wc) = (row.chunks_exact(4), w.chunks_exact(4));
+    let (rr, wr) = (rc.remainder(), wc.remainder());
+    for (r, x) in rc.zip(wc) {
+        for k in 0..4 {
+            acc[k] += r[k] * x[k];
+        }
+    }
+    let tail: f64 = rr.iter().zip(wr).map(|(r, x)| r * x).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
+
+/// Runs the scaled backward recursion from t = T−1 down to 0, keeping only two rows of β̂, and
+/// calls `visit(t, β̂_t, w_{t+1})` at each step, where w_{t+1}(j) = b_j(o_{t+1}) β̂_{t+1}(j) /
+/// c_{t+1} (absent at t = T−1). Posteriors, expected counts and the public [`backward`] are all
+/// built on this one sweep.
+pub(crate) fn backward_sweep(
+    hmm: &Hmm,
+    obs: &[usize],
+    scale: &[f64],
+    mut visit: impl FnMut(usize, &[f64], Option<&[f64]>),
+) {
+    let n = hmm.n_states();
+    let len = obs.len();
+    let a = hmm.transitions();
+    let mut beta_next = vec![1.0; n];
+    let mut beta = vec![0.0; n];
+    let mut weighted = vec![0.0; n];
+    visit(len - 1, &beta_next, None);
+    for t in (0..len - 1).rev() {
+        let inv = 1.0 / scale[t + 1];
+        for ((w, b), nb) in weighted
+            .iter_mut()
+            .zip(hmm.emission_column(obs[t + 1]))
+            .zip(&beta_next)
+        {
+            *w = b * nb * inv;
+        }
+        match a.dense_rows() {
+            Some(rows) => {
+                for (i, out) in beta.iter_mut().enumerate() {
+                    *out = dot(&rows[i * n..(i + 1) * n], &weighted);
+                }
+            }
+            None => {
+                for (i, out) in beta.iter_mut().enumerate() {
+                    let mut s = 0.0;
+                    a.for_each_in_row(i, |j, aij, _| s += aij * weighted[j]);
+                    *out = s;
+                }
+            }
+        }
+        visit(t, &beta, Some(&weighted));
+        std::mem::swap(&mut beta, &mut beta_next);
+    }
+}
+
 /// The scaled backward pass for the scale factors of a forward pass: β̂, row-major T × N.
 pub fn backward(hmm: &Hmm, obs: &[usize], scale: &[f64]) -> Result<Vec<f64>> {
     hmm.check_observations(obs, 0)?;
@@ -88,28 +165,11 @@ pub fn backward(hmm: &Hmm, obs: &[usize], scale: &[f64]) -> Result<Vec<f64>> {
         )));
     }
     let n = hmm.n_states();
-    let len = obs.len();
-    let mut beta = vec![0.0; len * n];
-    beta[(len - 1) * n..].iter_mut().for_each(|v| *v = 1.0);
-    let mut weighted = vec![0.0; n];
-    let a = hmm.transitions();
-    for t in (0..len - 1).rev() {
-        // weighted[j] = b_j(o_{t+1}) β̂_{t+1}(j) / c_{t+1}
-        let inv = 1.0 / scale[t + 1];
-        for ((w, b), nb) in weighted
-            .iter_mut()
-            .zip(hmm.emission_column(obs[t + 1]))
-            .zip(&beta[(t + 1) * n..(t + 2) * n])
-        {
-            *w = b * nb * inv;
-        }
-        for (i, out) in beta[t * n..(t + 1) * n].iter_mut().enumerate() {
-            let mut s = 0.0;
-            a.for_each_in_row(i, |j, aij, _| s += aij * weighted[j]);
-            *out = s;
-        }
-    }
-    Ok(beta)
+    let mut out = vec![0.0; obs.len() * n];
+    backward_sweep(hmm, obs, scale, |t, beta, _| {
+        out[t * n..(t + 1) * n].copy_from_slice(beta)
+    });
+    Ok(out)
 }
 
 /// Posterior state marginals γ_t(i) = P(q_t = i | O, λ).
@@ -132,35 +192,47 @@ impl Posterior {
 
 /// Forward-backward: the posterior marginals of every state at every step.
 pub fn posterior(hmm: &Hmm, obs: &[usize]) -> Result<Posterior> {
-    let f = forward(hmm, obs)?;
-    let beta = backward(hmm, obs, &f.scale)?;
-    let gamma = f.alpha.iter().zip(&beta).map(|(a, b)| a * b).collect();
+    let Forward {
+        alpha: mut gamma,
+        scale,
+        log_likelihood,
+    } = forward(hmm, obs)?;
+    let n = hmm.n_states();
+    // γ_t = α̂_t β̂_t, formed in place in the α̂ buffer.
+    backward_sweep(hmm, obs, &scale, |t, beta, _| {
+        gamma[t * n..(t + 1) * n]
+            .iter_mut()
+            .zip(beta)
+            .for_each(|(g, b)| *g *= b);
+    });
     Ok(Posterior {
         gamma,
-        log_likelihood: f.log_likelihood,
-        n_states: hmm.n_states(),
+        log_likelihood,
+        n_states: n,
     })
 }
 
-/// Σ_t ξ_t(i, j): expected transition counts, one per stored entry of A (storage order, see
-/// [`crate::Transitions::values`]), from the forward and backward variables.
-pub(crate) fn accumulate_xi(hmm: &Hmm, obs: &[usize], f: &Forward, beta: &[f64], xi: &mut [f64]) {
-    let n = hmm.n_states();
+/// Adds ξ_t(i, j) = α̂_t(i) a_ij w_{t+1}(j) to `xi`, one entry per stored element of A (storage
+/// order, see [`crate::Transitions::values`]).
+pub(crate) fn add_xi(hmm: &Hmm, alpha_t: &[f64], weighted_next: &[f64], xi: &mut [f64]) {
     let a = hmm.transitions();
-    let mut weighted = vec![0.0; n];
-    for t in 0..obs.len() - 1 {
-        let inv = 1.0 / f.scale[t + 1];
-        for ((w, b), nb) in weighted
-            .iter_mut()
-            .zip(hmm.emission_column(obs[t + 1]))
-            .zip(&beta[(t + 1) * n..(t + 2) * n])
-        {
-            *w = b * nb * inv;
+    let n = alpha_t.len();
+    for (i, &al) in alpha_t.iter().enumerate() {
+        if al == 0.0 {
+            continue;
         }
-        for (i, &al) in f.alpha[t * n..(t + 1) * n].iter().enumerate() {
-            if al != 0.0 {
-                a.for_each_in_row(i, |j, aij, k| xi[k] += al * aij * weighted[j]);
+        match a.dense_rows() {
+            Some(rows) => {
+                let row = &rows[i * n..(i + 1) * n];
+                for ((x, aij), w) in xi[i * n..(i + 1) * n]
+                    .iter_mut()
+                    .zip(row)
+                    .zip(weighted_next)
+                {
+                    *x += al * aij * w;
+                }
             }
+            None => a.for_each_in_row(i, |j, aij, k| xi[k] += al * aij * weighted_next[j]),
         }
     }
 }
@@ -168,10 +240,13 @@ pub(crate) fn accumulate_xi(hmm: &Hmm, obs: &[usize], f: &Forward, beta: &[f64],
 /// Expected transition counts Σ_t ξ_t(i, j) as a row-major N × N matrix.
 pub fn expected_transitions(hmm: &Hmm, obs: &[usize]) -> Result<Vec<f64>> {
     let f = forward(hmm, obs)?;
-    let beta = backward(hmm, obs, &f.scale)?;
-    let mut xi = vec![0.0; hmm.transitions().n_stored()];
-    accumulate_xi(hmm, obs, &f, &beta, &mut xi);
     let n = hmm.n_states();
+    let mut xi = vec![0.0; hmm.transitions().n_stored()];
+    backward_sweep(hmm, obs, &f.scale, |t, _, weighted| {
+        if let Some(w) = weighted {
+            add_xi(hmm, &f.alpha[t * n..(t + 1) * n], w, &mut xi);
+        }
+    });
     let mut out = vec![0.0; n * n];
     for i in 0..n {
         hmm.transitions()
@@ -197,31 +272,54 @@ pub fn viterbi(hmm: &Hmm, obs: &[usize]) -> Result<(Vec<usize>, f64)> {
     let mut next = vec![f64::NEG_INFINITY; n];
     let mut back = vec![0u32; len * n];
     for t in 1..len {
-        next.iter_mut().for_each(|v| *v = f64::NEG_INFINITY);
         let psi = &mut back[t * n..(t + 1) * n];
-        for (i, &d) in delta.iter().enumerate() {
-            if d == f64::NEG_INFINITY {
-                continue;
-            }
-            a.for_each_in_row(i, |j, _, k| {
-                let cand = d + log_a[k];
-                if cand > next[j] {
-                    next[j] = cand;
-                    psi[j] = i as u32;
+        match a.dense_rows() {
+            // Contiguous rows: a branch-free max-plus update per row that the compiler can
+            // vectorise; rows in ascending order with a strict comparison keep the lowest
+            // predecessor on ties.
+            Some(_) => {
+                next.iter_mut().for_each(|v| *v = f64::NEG_INFINITY);
+                for (i, &d) in delta.iter().enumerate() {
+                    if d == f64::NEG_INFINITY {
+                        continue;
+                    }
+                    let row = &log_a[i * n..(i + 1) * n];
+                    for ((v, p), la) in next.iter_mut().zip(psi.iter_mut()).zip(row) {
+                        let cand = d + la;
+                        let better = cand > *v;
+                        *v = if better { cand } else { *v };
+                        *p = if better { i as u32 } else { *p };
+                    }
                 }
-            });
+            }
+            // Sparse: gather down each column (rows ascending, so the same tie rule).
+            None => {
+                for (j, (v, p)) in next.iter_mut().zip(psi.iter_mut()).enumerate() {
+                    let (mut best, mut arg) = (f64::NEG_INFINITY, 0);
+                    a.for_each_in_column(j, |i, _, k| {
+                        let cand = delta[i] + log_a[k];
+                        if cand > best {
+                            best = cand;
+                            arg = i;
+                        }
+                    });
+                    *v = best;
+                    *p = arg as u32;
+                }
+            }
         }
         for (v, lb) in next.iter_mut().zip(hmm.log_emission_column(obs[t])) {
             *v += lb;
         }
         std::mem::swap(&mut delta, &mut next);
     }
-    let (mut state, &best) = delta
-        .iter()
-        .enumerate()
-        .fold((0, &f64::NEG_INFINITY), |acc, (i, v)| {
-            if *v > *acc.1 { (i, v) } else { acc }
-        });
+    let (mut state, &best) =
+        delta
+            .iter()
+            .enumerate()
+            .fold((0, &f64::NEG_INFINITY), |acc, (i, v)| {
+                if *v > *acc.1 { (i, v) } else { acc }
+            });
     if best == f64::NEG_INFINITY {
         return Err(Error::ImpossibleObservation {
             sequence: 0,
@@ -265,8 +363,9 @@ fn log_sum_exp(v: impl Iterator<Item = f64> + Clone) -> f64 {
 }
 
 /// The forward recursion in log space: log α_t(j) = log b_j(o_t) + logsumexp_i(log α_{t−1}(i)
-/// + log a_ij). Slower than the scaled recursion; returns (log α row-major T × N,
-/// log P(O | λ)).
+/// + log a_ij). Slower than the scaled recursion.
+///
+/// Returns log α (row-major T × N) and log P(O | λ).
 pub fn forward_log(hmm: &Hmm, obs: &[usize]) -> Result<(Vec<f64>, f64)> {
     hmm.check_observations(obs, 0)?;
     let n = hmm.n_states();

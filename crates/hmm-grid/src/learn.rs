@@ -5,7 +5,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::inference::{accumulate_xi, backward, forward_in};
+use crate::inference::{add_xi, backward_sweep, forward_in};
 use crate::model::Hmm;
 
 /// Which parts of λ stay fixed during training; frozen parts come out bit-identical.
@@ -129,19 +129,22 @@ fn e_step(hmm: &Hmm, obs: &[usize], sequence: usize) -> Result<Stats> {
     let n = hmm.n_states();
     let m = hmm.n_symbols();
     let f = forward_in(hmm, obs, sequence)?;
-    let beta = backward(hmm, obs, &f.scale)?;
     let mut s = Stats::zeros(hmm);
     s.log_likelihood = f.log_likelihood;
-    accumulate_xi(hmm, obs, &f, &beta, &mut s.xi);
-    for (t, &o) in obs.iter().enumerate() {
-        for i in 0..n {
-            let g = f.alpha[t * n + i] * beta[t * n + i];
+    backward_sweep(hmm, obs, &f.scale, |t, beta, weighted| {
+        let alpha_t = &f.alpha[t * n..(t + 1) * n];
+        if let Some(w) = weighted {
+            add_xi(hmm, alpha_t, w, &mut s.xi);
+        }
+        let o = obs[t];
+        for (i, (a, b)) in alpha_t.iter().zip(beta).enumerate() {
+            let g = a * b;
             if t == 0 {
                 s.initial[i] = g;
             }
             s.emissions[i * m + o] += g;
         }
-    }
+    });
     Ok(s)
 }
 

@@ -287,9 +287,9 @@ impl SensorModel {
         if self.sensors.is_empty() {
             return Err(Error::Empty("sensor list"));
         }
-        if !(self.base_sigma.is_finite() && self.base_sigma > 0.0)
-            || !(self.sigma_per_distance.is_finite() && self.sigma_per_distance >= 0.0)
-        {
+        let base_ok = self.base_sigma.is_finite() && self.base_sigma > 0.0;
+        let slope_ok = self.sigma_per_distance.is_finite() && self.sigma_per_distance >= 0.0;
+        if !(base_ok && slope_ok) {
             return Err(Error::InvalidParameter {
                 name: "sensor accuracy",
                 reason: format!(

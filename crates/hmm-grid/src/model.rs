@@ -45,6 +45,13 @@ enum Storage {
     Sparse {
         row_ptr: Vec<usize>,
         cols: Vec<usize>,
+        /// The same entries by column (CSC), rows ascending: `col_rows[e]` is the row and
+        /// `col_index[e]` the storage index of entry e. Forward-type recursions gather down a
+        /// column into a register instead of scattering into memory, which removes a
+        /// read-modify-write dependency per entry.
+        col_ptr: Vec<usize>,
+        col_rows: Vec<usize>,
+        col_index: Vec<usize>,
     },
 }
 
@@ -131,9 +138,16 @@ impl Transitions {
             }
             row_ptr.push(cols.len());
         }
+        let (col_ptr, col_rows, col_index) = by_column(n, &row_ptr, &cols);
         Ok(Self {
             n,
-            storage: Storage::Sparse { row_ptr, cols },
+            storage: Storage::Sparse {
+                row_ptr,
+                cols,
+                col_ptr,
+                col_rows,
+                col_index,
+            },
             values,
         })
     }
@@ -201,6 +215,12 @@ impl Transitions {
         out
     }
 
+    /// The row-major N × N values when stored densely; the algorithms then use contiguous
+    /// slice loops that the compiler vectorises.
+    pub fn dense_rows(&self) -> Option<&[f64]> {
+        matches!(self.storage, Storage::Dense).then_some(self.values.as_slice())
+    }
+
     /// The stored values, in storage order.
     pub fn values(&self) -> &[f64] {
         &self.values
@@ -216,9 +236,36 @@ impl Transitions {
                     f(j, a, start + j);
                 }
             }
-            Storage::Sparse { row_ptr, cols } => {
-                for k in row_ptr[i]..row_ptr[i + 1] {
-                    f(cols[k], self.values[k], k);
+            Storage::Sparse { row_ptr, cols, .. } => {
+                let range = row_ptr[i]..row_ptr[i + 1];
+                let entries = cols[range.clone()].iter().zip(&self.values[range.clone()]);
+                for (k, (&j, &a)) in range.zip(entries) {
+                    f(j, a, k);
+                }
+            }
+        }
+    }
+
+    /// Calls `f(i, a_ij, storage index)` for every stored entry of column `j`, rows ascending.
+    /// Dense storage visits all N rows.
+    #[inline]
+    pub fn for_each_in_column(&self, j: usize, mut f: impl FnMut(usize, f64, usize)) {
+        match &self.storage {
+            Storage::Dense => {
+                for i in 0..self.n {
+                    let k = i * self.n + j;
+                    f(i, self.values[k], k);
+                }
+            }
+            Storage::Sparse {
+                col_ptr,
+                col_rows,
+                col_index,
+                ..
+            } => {
+                let range = col_ptr[j]..col_ptr[j + 1];
+                for (&i, &k) in col_rows[range.clone()].iter().zip(&col_index[range]) {
+                    f(i, self.values[k], k);
                 }
             }
         }
@@ -244,6 +291,28 @@ impl Transitions {
         }
         Ok(out)
     }
+}
+
+/// The CSC index of a CSR pattern: (column pointers, row of each entry, storage index of each
+/// entry), rows ascending within a column.
+fn by_column(n: usize, row_ptr: &[usize], cols: &[usize]) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let mut col_ptr = vec![0usize; n + 1];
+    cols.iter().for_each(|&c| col_ptr[c + 1] += 1);
+    for j in 0..n {
+        col_ptr[j + 1] += col_ptr[j];
+    }
+    let mut fill = col_ptr.clone();
+    let mut col_rows = vec![0; cols.len()];
+    let mut col_index = vec![0; cols.len()];
+    for i in 0..n {
+        for k in row_ptr[i]..row_ptr[i + 1] {
+            let slot = fill[cols[k]];
+            col_rows[slot] = i;
+            col_index[slot] = k;
+            fill[cols[k]] += 1;
+        }
+    }
+    (col_ptr, col_rows, col_index)
 }
 
 /// A discrete hidden Markov model with N states and M observation symbols.

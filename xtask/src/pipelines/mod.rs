@@ -6,6 +6,7 @@ use indicatif::ProgressBar;
 
 use crate::scenario::{PipelineOutput, Scenario};
 
+mod hmm;
 mod kalman;
 mod simulator;
 
@@ -14,6 +15,7 @@ pub type PipelineFn = fn(&Scenario, &ProgressBar) -> Result<PipelineOutput>;
 
 /// Every pipeline by name.
 const PIPELINES: &[(&str, PipelineFn)] = &[
+    ("hmm-tracking", hmm::run),
     ("kalman-crossing", kalman::run),
     ("simulator-poisson", simulator::run),
 ];
