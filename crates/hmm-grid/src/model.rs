@@ -36,8 +36,7 @@ pub(crate) fn check_row(values: &[f64], what: &'static str, row: usize) -> Resul
     Ok(())
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, PartialEq)]
 enum Storage {
     /// Row-major N × N.
     Dense,
@@ -45,14 +44,45 @@ enum Storage {
     Sparse {
         row_ptr: Vec<usize>,
         cols: Vec<usize>,
-        /// The same entries by column (CSC), rows ascending: `col_rows[e]` is the row and
-        /// `col_index[e]` the storage index of entry e. Forward-type recursions gather down a
-        /// column into a register instead of scattering into memory, which removes a
-        /// read-modify-write dependency per entry.
+        /// The same entries by column (CSC), rows ascending: `col_rows[e]` is the row,
+        /// `col_index[e]` the storage index and `col_values[e]` the value of entry e.
+        /// Forward-type recursions gather down a column into a register instead of scattering
+        /// into memory, which removes a read-modify-write dependency per entry.
         col_ptr: Vec<usize>,
         col_rows: Vec<usize>,
         col_index: Vec<usize>,
+        col_values: Vec<f64>,
     },
+}
+
+/// The serialised form: dense values or sparse rows, rebuilt and re-checked on reading.
+#[derive(Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+enum RawTransitions {
+    Dense { n: usize, values: Vec<f64> },
+    Sparse { rows: Vec<Vec<(usize, f64)>> },
+}
+
+impl TryFrom<RawTransitions> for Transitions {
+    type Error = Error;
+    fn try_from(raw: RawTransitions) -> Result<Self> {
+        match raw {
+            RawTransitions::Dense { n, values } => Transitions::dense(n, values),
+            RawTransitions::Sparse { rows } => Transitions::sparse(rows),
+        }
+    }
+}
+
+impl From<Transitions> for RawTransitions {
+    fn from(t: Transitions) -> Self {
+        match t.storage {
+            Storage::Dense => RawTransitions::Dense {
+                n: t.n,
+                values: t.values,
+            },
+            Storage::Sparse { .. } => RawTransitions::Sparse { rows: t.rows() },
+        }
+    }
 }
 
 /// The transition matrix A (a_ij = P(state j at t+1 | state i at t)).
@@ -61,6 +91,7 @@ enum Storage {
 /// order for sparse storage. Every algorithm visits rows through [`Transitions::for_each_in_row`],
 /// so it costs O(nnz) per time step when sparse and runs over contiguous rows when dense.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawTransitions", into = "RawTransitions")]
 pub struct Transitions {
     n: usize,
     storage: Storage,
@@ -139,6 +170,7 @@ impl Transitions {
             row_ptr.push(cols.len());
         }
         let (col_ptr, col_rows, col_index) = by_column(n, &row_ptr, &cols);
+        let col_values = col_index.iter().map(|&k| values[k]).collect();
         Ok(Self {
             n,
             storage: Storage::Sparse {
@@ -147,14 +179,15 @@ impl Transitions {
                 col_ptr,
                 col_rows,
                 col_index,
+                col_values,
             },
             values,
         })
     }
 
-    /// The same matrix in sparse storage.
-    pub fn to_sparse(&self) -> Self {
-        let rows = (0..self.n)
+    /// The non-zero entries as (column, probability) rows.
+    pub fn rows(&self) -> Vec<Vec<(usize, f64)>> {
+        (0..self.n)
             .map(|i| {
                 let mut row = Vec::new();
                 self.for_each_in_row(i, |j, a, _| {
@@ -164,9 +197,13 @@ impl Transitions {
                 });
                 row
             })
-            .collect();
+            .collect()
+    }
+
+    /// The same matrix in sparse storage.
+    pub fn to_sparse(&self) -> Self {
         // The rows were valid before, so they are valid now.
-        Self::sparse(rows).unwrap_or_else(|_| self.clone())
+        Self::sparse(self.rows()).unwrap_or_else(|_| self.clone())
     }
 
     /// The same matrix in dense storage.
@@ -261,11 +298,15 @@ impl Transitions {
                 col_ptr,
                 col_rows,
                 col_index,
+                col_values,
                 ..
             } => {
                 let range = col_ptr[j]..col_ptr[j + 1];
-                for (&i, &k) in col_rows[range.clone()].iter().zip(&col_index[range]) {
-                    f(i, self.values[k], k);
+                let entries = col_rows[range.clone()]
+                    .iter()
+                    .zip(&col_index[range.clone()]);
+                for ((&i, &k), &a) in entries.zip(&col_values[range]) {
+                    f(i, a, k);
                 }
             }
         }
@@ -281,9 +322,25 @@ impl Transitions {
 
     /// Replaces the stored values (same sparsity pattern), re-checking every row.
     pub(crate) fn with_values(&self, values: Vec<f64>) -> Result<Self> {
+        if values.len() != self.values.len() {
+            return Err(Error::Shape(format!(
+                "{} transition values for {} stored entries",
+                values.len(),
+                self.values.len()
+            )));
+        }
+        let mut storage = self.storage.clone();
+        if let Storage::Sparse {
+            col_index,
+            col_values,
+            ..
+        } = &mut storage
+        {
+            *col_values = col_index.iter().map(|&k| values[k]).collect();
+        }
         let out = Self {
             n: self.n,
-            storage: self.storage.clone(),
+            storage,
             values,
         };
         for i in 0..out.n {
@@ -343,9 +400,8 @@ struct RawHmm {
 impl TryFrom<RawHmm> for Hmm {
     type Error = Error;
     fn try_from(r: RawHmm) -> Result<Self> {
-        // Deserialised transitions are re-validated through `with_values`.
-        let transitions = r.transitions.with_values(r.transitions.values.clone())?;
-        Hmm::new(r.initial, transitions, r.emissions, r.n_symbols)
+        // `Transitions` re-checks itself when deserialised.
+        Hmm::new(r.initial, r.transitions, r.emissions, r.n_symbols)
     }
 }
 

@@ -402,6 +402,19 @@ fn invalid_models_and_observations_are_clear_errors() {
 }
 
 #[test]
+fn models_round_trip_through_serde_and_reject_corrupt_input() {
+    for hmm in [
+        random_hmm(4, 3, false, 70),
+        random_hmm(4, 3, true, 71).with_transition_storage(true),
+    ] {
+        let json = serde_json::to_string(&hmm).unwrap();
+        assert_eq!(serde_json::from_str::<Hmm>(&json).unwrap(), hmm);
+    }
+    let bad = r#"{"initial":[1.0],"transitions":{"sparse":{"rows":[[[3,1.0]]]}},"emissions":[1.0],"n_symbols":1}"#;
+    assert!(serde_json::from_str::<Hmm>(bad).is_err());
+}
+
+#[test]
 fn maps_build_valid_models() {
     let grid = CellGrid {
         n_cols: 3,
