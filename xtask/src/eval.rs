@@ -21,7 +21,7 @@ fn read_rows(path: &Path) -> Result<Vec<MotRow>> {
 
 /// Ground truth rows with confidence 0 are "ignore" annotations in MOTChallenge and are
 /// dropped, as TrackEval does before matching (its distractor-class handling is not applied).
-fn load(gt: &Path, pred: &Path) -> Result<(TrackSet, TrackSet)> {
+pub(crate) fn load(gt: &Path, pred: &Path) -> Result<(TrackSet, TrackSet)> {
     let gt_rows: Vec<MotRow> = read_rows(gt)?
         .into_iter()
         .filter(|r| r.confidence != 0.0)

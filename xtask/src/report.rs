@@ -117,6 +117,10 @@ fn html_escape(s: &str) -> String {
 
 /// Formats a number for a table: 4 significant digits, plain or scientific.
 pub fn fmt_num(v: f64) -> String {
+    if v.fract() == 0.0 && v.abs() < 1e9 {
+        // Counts and other whole numbers print as integers.
+        return format!("{v:.0}");
+    }
     if v == 0.0 || (1e-3..1e5).contains(&v.abs()) {
         let digits = if v == 0.0 {
             0

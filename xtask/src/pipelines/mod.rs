@@ -8,6 +8,7 @@ use crate::scenario::{PipelineOutput, Scenario};
 
 mod hmm;
 mod kalman;
+mod mot_eval;
 mod simulator;
 
 /// A pipeline: scenario in, metrics and report section out; ticks `progress` as it goes.
@@ -17,6 +18,7 @@ pub type PipelineFn = fn(&Scenario, &ProgressBar) -> Result<PipelineOutput>;
 const PIPELINES: &[(&str, PipelineFn)] = &[
     ("hmm-tracking", hmm::run),
     ("kalman-crossing", kalman::run),
+    ("mot-eval", mot_eval::run),
     ("simulator-poisson", simulator::run),
 ];
 
