@@ -24,6 +24,9 @@ struct Params {
     reference: String,
 }
 
+/// A py-motmetrics summary key and the conversion of its value to our convention.
+type Reference = Option<(&'static str, fn(f64) -> f64)>;
+
 pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput> {
     let p: Params = scenario.params()?;
     let root = workspace_root();
@@ -35,8 +38,8 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
             .with_context(|| format!("reading {}", reference_path.display()))?,
     )?;
     let (c, i, h) = (&report.clear, &report.identity, &report.hota);
-    // (name, ours, py-motmetrics key, how to turn its value into ours)
-    let rows: [(&str, f64, Option<(&str, fn(f64) -> f64)>); 16] = [
+    // (name, ours, py-motmetrics key and how to turn its value into ours)
+    let rows: [(&str, f64, Reference); 16] = [
         ("MOTA", c.mota, Some(("mota", |v| v))),
         (
             "MOTP (mean IoU; motmetrics reports 1 − IoU)",
