@@ -1,0 +1,186 @@
+//! Gap recovery: the trajectory of an object between the end of one track segment (A) and the
+//! start of the next (B), by the goal-directed model or by a baseline.
+
+use nalgebra::{Matrix2, Matrix2x4, Matrix4, Vector2, Vector4};
+use serde::{Deserialize, Serialize};
+use tracker_model::{
+    ConstantVelocity2, CvNoise, Frame, Gaussian, Point2, TransitionModel, filter,
+    position_measurement,
+};
+
+use crate::baselines::{BSplineConfig, linear, lsq_bspline, natural_cubic_spline};
+use crate::error::{Error, Result};
+use crate::goal::{Goal, GoalDirected};
+
+/// A position observed at a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Observation {
+    /// The frame.
+    pub frame: Frame,
+    /// Where the object was seen.
+    pub position: Point2,
+}
+
+/// The motion and noise model GDT recovers with.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct GdtConfig {
+    /// White-acceleration spectral density per frame (pixels² / frame³).
+    pub accel_psd: f64,
+    /// Position measurement variance per axis (pixels²); also the goal's Π.
+    pub measurement_variance: f64,
+    /// Prior velocity variance per axis at segment A's first frame.
+    pub initial_velocity_variance: f64,
+}
+
+impl Default for GdtConfig {
+    fn default() -> Self {
+        Self {
+            accel_psd: 0.05,
+            measurement_variance: 4.0,
+            initial_velocity_variance: 25.0,
+        }
+    }
+}
+
+/// A recovered gap: a position (and, for GDT, a covariance) at every missing frame.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RecoveredGap {
+    /// The missing frames, ascending.
+    pub frames: Vec<Frame>,
+    /// Recovered positions.
+    pub positions: Vec<Point2>,
+    /// Position covariances (GDT only; empty for the baselines).
+    pub covariances: Vec<Matrix2<f64>>,
+}
+
+/// Checks the two segments and returns the missing frames between them.
+fn missing_frames(a: &[Observation], b: &[Observation]) -> Result<Vec<Frame>> {
+    let (Some(last_a), Some(first_b)) = (a.last(), b.first()) else {
+        return Err(Error::Invalid(
+            "both segments need at least one observation".into(),
+        ));
+    };
+    for seg in [a, b] {
+        if seg.windows(2).any(|w| w[1].frame <= w[0].frame) {
+            return Err(Error::Invalid(
+                "segment frames must strictly increase".into(),
+            ));
+        }
+        if seg
+            .iter()
+            .any(|o| !(o.position.x.is_finite() && o.position.y.is_finite()))
+        {
+            return Err(Error::Invalid("segment positions must be finite".into()));
+        }
+    }
+    if first_b.frame <= last_a.frame + 1 {
+        return Err(Error::Invalid(format!(
+            "segment B starts at frame {}, so nothing is missing after frame {}",
+            first_b.frame, last_a.frame
+        )));
+    }
+    Ok((last_a.frame + 1..first_b.frame).collect())
+}
+
+/// Recovers the gap with the goal-directed model: a Kalman filter over segment A gives the
+/// state at A's last frame; the goal is B's first observation, T frames later; the conditioned
+/// model's forward prediction gives the position and its covariance at every missing frame.
+pub fn recover_gdt(a: &[Observation], b: &[Observation], cfg: &GdtConfig) -> Result<RecoveredGap> {
+    let frames = missing_frames(a, b)?;
+    let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: cfg.accel_psd })?;
+    let sensor = position_measurement(cfg.measurement_variance)?;
+    let first = a[0];
+    let prior = Gaussian::new(
+        Vector4::new(first.position.x, first.position.y, 0.0, 0.0),
+        Matrix4::from_diagonal(&Vector4::new(
+            cfg.measurement_variance,
+            cfg.measurement_variance,
+            cfg.initial_velocity_variance,
+            cfg.initial_velocity_variance,
+        )),
+    )?;
+    let last_a = a[a.len() - 1].frame;
+    let mut measurements = vec![None; (last_a - first.frame + 1) as usize];
+    for o in a {
+        measurements[(o.frame - first.frame) as usize] = Some(o.position);
+    }
+    let run = filter(&motion, &sensor, &prior, &measurements)?;
+    let start = run
+        .steps
+        .last()
+        .map(|s| s.filtered.clone())
+        .ok_or_else(|| Error::Invalid("segment A is empty".into()))?;
+    let horizon = (b[0].frame - last_a) as usize;
+    let goal = Goal {
+        observation: Matrix2x4::identity(),
+        value: b[0].position,
+        covariance: Matrix2::identity() * cfg.measurement_variance,
+    };
+    let f = motion.transition_matrix(1);
+    let q = motion.process_noise(1);
+    let model = GoalDirected::new(&vec![f; horizon], &vec![q; horizon], &goal, &start)?;
+    let moments = model.predict();
+    Ok(RecoveredGap {
+        positions: moments[1..horizon]
+            .iter()
+            .map(|m| Vector2::new(m.mean[0], m.mean[1]))
+            .collect(),
+        covariances: moments[1..horizon]
+            .iter()
+            .map(|m| m.covariance.fixed_view::<2, 2>(0, 0).into_owned())
+            .collect(),
+        frames,
+    })
+}
+
+/// The interpolation baselines.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Baseline {
+    /// A straight line from A's last to B's first observation.
+    Linear,
+    /// A natural cubic spline through every observation of both segments.
+    NaturalCubicSpline,
+    /// A least-squares cubic B-spline over both segments (unit weights).
+    LeastSquaresBSpline(BSplineConfig),
+}
+
+/// Recovers the gap with a baseline, per coordinate.
+pub fn recover_baseline(
+    a: &[Observation],
+    b: &[Observation],
+    method: &Baseline,
+) -> Result<RecoveredGap> {
+    let frames = missing_frames(a, b)?;
+    let samples: Vec<&Observation> = a.iter().chain(b).collect();
+    let times: Vec<f64> = samples.iter().map(|o| f64::from(o.frame)).collect();
+    let at: Vec<f64> = frames.iter().map(|&f| f64::from(f)).collect();
+    let coordinate = |axis: usize| -> Result<Vec<f64>> {
+        let values: Vec<f64> = samples.iter().map(|o| o.position[axis]).collect();
+        match method {
+            Baseline::Linear => {
+                let (la, fb) = (a[a.len() - 1], b[0]);
+                linear(
+                    &[f64::from(la.frame), f64::from(fb.frame)],
+                    &[la.position[axis], fb.position[axis]],
+                    &at,
+                )
+            }
+            Baseline::NaturalCubicSpline => natural_cubic_spline(&times, &values, &at),
+            Baseline::LeastSquaresBSpline(cfg) => {
+                let gap = (f64::from(a[a.len() - 1].frame), f64::from(b[0].frame));
+                lsq_bspline(&times, &values, &vec![1.0; times.len()], gap, cfg, &at)
+            }
+        }
+    };
+    let (xs, ys) = (coordinate(0)?, coordinate(1)?);
+    Ok(RecoveredGap {
+        frames,
+        positions: xs
+            .into_iter()
+            .zip(ys)
+            .map(|(x, y)| Vector2::new(x, y))
+            .collect(),
+        covariances: Vec::new(),
+    })
+}

@@ -1,0 +1,36 @@
+//! # gdt-bridge
+//!
+//! Recovers the missing trajectory between two disconnected track segments (seed 003): the
+//! goal-directed state equation of Srinivasan, Eden, Willsky & Brown (2006) conditions a linear
+//! Gauss-Markov motion model on reaching a noisy goal (the next segment's first observation) at
+//! a known time, and its forward prediction fills the gap with positions and covariances.
+//!
+//! * [`GoalDirected`]: the general form (time-varying A_t, Q_t, goal y_T = H x_T + v), giving
+//!   each step's transition, drift offset and reduced noise, and the conditional initial state;
+//! * [`recover_gdt`]: gap recovery from segments A and B with a constant-velocity model;
+//! * baselines [`linear`], [`natural_cubic_spline`], [`lsq_bspline`] and [`recover_baseline`].
+//!
+//! Status: segment linking, the goal-state (backward-filter) variant, the seed's evaluation
+//! protocol and the invertible-H / pseudo-inverse special forms are not implemented yet.
+//!
+//! ```
+//! use gdt_bridge::{GdtConfig, Observation, recover_gdt};
+//! use tracker_model::Point2;
+//! let seg = |f0: u32, n: u32| (f0..f0 + n).map(|f| Observation { frame: f, position: Point2::new(2.0 * f as f64, 1.0) }).collect::<Vec<_>>();
+//! let gap = recover_gdt(&seg(0, 10), &seg(20, 10), &GdtConfig::default()).unwrap();
+//! assert_eq!(gap.frames, (10..20).collect::<Vec<_>>());
+//! assert!((gap.positions[5].x - 30.0).abs() < 1.0);
+//! ```
+
+mod baselines;
+mod error;
+mod gap;
+mod goal;
+
+#[cfg(test)]
+mod tests;
+
+pub use baselines::{BSplineConfig, linear, lsq_bspline, natural_cubic_spline};
+pub use error::{Error, Result};
+pub use gap::{Baseline, GdtConfig, Observation, RecoveredGap, recover_baseline, recover_gdt};
+pub use goal::{Goal, GoalDirected, GoalStep, Moments};

@@ -1,0 +1,266 @@
+//! GDT against an independent RTS smoother, and the baselines against hand-worked cases and
+//! exactly representable functions.
+
+use approx::assert_relative_eq;
+use nalgebra::{Matrix2, Matrix2x4, Matrix4, SMatrix, Vector2, Vector4};
+use tracker_model::{
+    ConstantVelocity2, CvNoise, Gaussian, LinearObservation, Point2, TransitionModel, filter,
+    smooth,
+};
+
+use crate::*;
+
+/// Conditioning on the goal is the same as smoothing the free model with the goal as a
+/// terminal measurement: every marginal mean and covariance must agree.
+#[test]
+fn goal_directed_prediction_equals_rts_smoothing() {
+    let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: 0.3 }).unwrap();
+    let prior = Gaussian::new(
+        Vector4::new(1.0, -2.0, 0.5, 0.2),
+        Matrix4::from_diagonal(&Vector4::new(2.0, 3.0, 0.5, 0.4)),
+    )
+    .unwrap();
+    let horizon = 12;
+    for (h, value, pi) in [
+        // Position-only goal.
+        (
+            Matrix2x4::identity(),
+            Vector2::new(9.0, 4.0),
+            Matrix2::new(0.5, 0.1, 0.1, 0.8),
+        ),
+    ] {
+        let goal = Goal {
+            observation: h,
+            value,
+            covariance: pi,
+        };
+        let f = motion.transition_matrix(1);
+        let q = motion.process_noise(1);
+        let gdt = GoalDirected::new(&vec![f; horizon], &vec![q; horizon], &goal, &prior).unwrap();
+        let moments = gdt.predict();
+        let sensor = LinearObservation::new(h, pi).unwrap();
+        let mut zs: Vec<Option<Vector2<f64>>> = vec![None; horizon + 1];
+        zs[horizon] = Some(value);
+        let smoothed = smooth(&motion, &filter(&motion, &sensor, &prior, &zs).unwrap()).unwrap();
+        for (t, (m, s)) in moments.iter().zip(&smoothed).enumerate() {
+            assert!((m.mean - s.mean()).amax() < 1e-9, "mean at t = {t}");
+            assert!(
+                (m.covariance - s.covariance()).amax() < 1e-9,
+                "covariance at t = {t}"
+            );
+        }
+    }
+}
+
+#[test]
+fn full_state_goal_with_time_varying_model_equals_smoothing() {
+    // Time-varying A_t, Q_t: check by brute force with the joint Gaussian of (x_0..x_T).
+    let horizon = 5;
+    let a: Vec<SMatrix<f64, 2, 2>> = (0..horizon)
+        .map(|t| SMatrix::<f64, 2, 2>::new(1.0, 0.5 + 0.1 * t as f64, 0.0, 0.9))
+        .collect();
+    let q: Vec<SMatrix<f64, 2, 2>> = (0..horizon)
+        .map(|t| SMatrix::<f64, 2, 2>::new(0.2 + 0.05 * t as f64, 0.02, 0.02, 0.1))
+        .collect();
+    let prior = Gaussian::new(Vector2::new(0.5, 1.0), Matrix2::new(1.0, 0.2, 0.2, 0.5)).unwrap();
+    let goal = Goal {
+        observation: Matrix2::identity(),
+        value: Vector2::new(3.0, -1.0),
+        covariance: Matrix2::identity() * 0.3,
+    };
+    let moments = GoalDirected::new(&a, &q, &goal, &prior).unwrap().predict();
+    // Joint moments of z = (x_0, …, x_T, y_T) from the free model, then condition on y_T.
+    let dim = 2 * (horizon + 2);
+    let mut mean = nalgebra::DVector::<f64>::zeros(dim);
+    let mut cov = nalgebra::DMatrix::<f64>::zeros(dim, dim);
+    // x_t = Φ(t,0) x_0 + Σ_{s≤t} Φ(t,s) w_s: cross-covariances via transition products.
+    let phi =
+        |t: usize, s: usize| (s..t).fold(SMatrix::<f64, 2, 2>::identity(), |acc, k| a[k] * acc);
+    for t in 0..=horizon {
+        mean.rows_mut(2 * t, 2)
+            .copy_from(&(phi(t, 0) * prior.mean()));
+        for u in 0..=horizon {
+            let mut c = phi(t, 0) * prior.covariance() * phi(u, 0).transpose();
+            for s in 1..=t.min(u) {
+                c += phi(t, s) * q[s - 1] * phi(u, s).transpose();
+            }
+            cov.view_mut((2 * t, 2 * u), (2, 2)).copy_from(&c);
+        }
+    }
+    let y = 2 * (horizon + 1);
+    let last_mean = mean.rows(2 * horizon, 2).clone_owned();
+    mean.rows_mut(y, 2).copy_from(&last_mean);
+    for t in 0..=horizon {
+        let c = cov.view((2 * t, 2 * horizon), (2, 2)).clone_owned();
+        cov.view_mut((2 * t, y), (2, 2)).copy_from(&c);
+        cov.view_mut((y, 2 * t), (2, 2)).copy_from(&c.transpose());
+    }
+    let xx = cov.view((2 * horizon, 2 * horizon), (2, 2)).clone_owned();
+    cov.view_mut((y, y), (2, 2))
+        .copy_from(&(xx + goal.covariance));
+    let syy_inv = cov
+        .view((y, y), (2, 2))
+        .clone_owned()
+        .try_inverse()
+        .unwrap();
+    for (t, moment) in moments.iter().enumerate() {
+        let sxy = cov.view((2 * t, y), (2, 2)).clone_owned();
+        let m = mean.rows(2 * t, 2) + &sxy * &syy_inv * (goal.value - mean.rows(y, 2));
+        let c = cov.view((2 * t, 2 * t), (2, 2)) - &sxy * &syy_inv * sxy.transpose();
+        assert!((moment.mean - m).amax() < 1e-10, "mean at t = {t}");
+        assert!(
+            (moment.covariance - c).amax() < 1e-10,
+            "covariance at t = {t}"
+        );
+    }
+}
+
+#[test]
+fn an_exact_goal_is_reached() {
+    let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: 1.0 }).unwrap();
+    let prior = Gaussian::new(Vector4::zeros(), Matrix4::identity()).unwrap();
+    let goal = Goal {
+        observation: Matrix2x4::identity(),
+        value: Vector2::new(50.0, -20.0),
+        covariance: Matrix2::identity() * 1e-10,
+    };
+    let m = GoalDirected::new(
+        &[motion.transition_matrix(1); 8],
+        &[motion.process_noise(1); 8],
+        &goal,
+        &prior,
+    )
+    .unwrap()
+    .predict();
+    assert!((m[8].mean.fixed_rows::<2>(0) - goal.value).amax() < 1e-6);
+    assert!(m[8].covariance[(0, 0)] < 1e-6);
+    assert!(GoalDirected::<4>::new(&[], &[], &goal, &prior).is_err());
+}
+
+#[test]
+fn baselines_by_hand() {
+    assert_eq!(
+        linear(&[0.0, 2.0], &[1.0, 5.0], &[0.5, 1.0]).unwrap(),
+        vec![2.0, 3.0]
+    );
+    // Natural spline through (0,0), (1,1), (2,0): M_1 = −3, so S(0.5) = −3·0.125/6 + 1.5·0.5.
+    let s = natural_cubic_spline(&[0.0, 1.0, 2.0], &[0.0, 1.0, 0.0], &[0.5, 1.0, 1.5]).unwrap();
+    assert_relative_eq!(s[0], 0.6875, epsilon = 1e-12);
+    assert_relative_eq!(s[1], 1.0, epsilon = 1e-12);
+    assert_relative_eq!(s[2], 0.6875, epsilon = 1e-12);
+    // A natural spline reproduces straight lines and interpolates its samples.
+    let t = [0.0, 1.0, 2.5, 4.0, 7.0];
+    let line: Vec<f64> = t.iter().map(|x| 3.0 - 2.0 * x).collect();
+    let at = [0.3, 3.3, 6.0];
+    for (got, x) in natural_cubic_spline(&t, &line, &at).unwrap().iter().zip(at) {
+        assert_relative_eq!(*got, 3.0 - 2.0 * x, epsilon = 1e-12);
+    }
+    let wiggle = [0.0, 2.0, -1.0, 3.0, 0.5];
+    assert!(
+        natural_cubic_spline(&t, &wiggle, &t)
+            .unwrap()
+            .iter()
+            .zip(wiggle)
+            .all(|(a, b)| (a - b).abs() < 1e-12)
+    );
+    assert!(natural_cubic_spline(&[0.0, 0.0], &[1.0, 2.0], &[0.0]).is_err());
+    assert!(linear(&[0.0], &[1.0], &[0.0]).is_err());
+}
+
+#[test]
+fn least_squares_bspline_reproduces_a_cubic() {
+    // A cubic polynomial lies in the spline space, so the fit is exact whatever the weights.
+    let times: Vec<f64> = (0..10).chain(20..30).map(f64::from).collect();
+    let cubic = |x: f64| 0.01 * x.powi(3) - 0.3 * x * x + 2.0 * x - 5.0;
+    let values: Vec<f64> = times.iter().map(|&x| cubic(x)).collect();
+    let weights: Vec<f64> = times.iter().map(|x| 1.0 + 0.1 * x).collect();
+    let at: Vec<f64> = (10..20).map(f64::from).collect();
+    let fit = lsq_bspline(
+        &times,
+        &values,
+        &weights,
+        (9.0, 20.0),
+        &BSplineConfig::default(),
+        &at,
+    )
+    .unwrap();
+    for (got, x) in fit.iter().zip(at) {
+        assert_relative_eq!(*got, cubic(x), epsilon = 1e-9);
+    }
+    assert!(
+        lsq_bspline(
+            &times,
+            &values,
+            &vec![0.0; times.len()],
+            (9.0, 20.0),
+            &BSplineConfig::default(),
+            &[1.0]
+        )
+        .is_err()
+    );
+}
+
+#[test]
+fn gaps_on_a_straight_path_are_recovered_by_every_method() {
+    let obs = |f: u32| Observation {
+        frame: f,
+        position: Point2::new(3.0 * f64::from(f), 100.0 - 0.5 * f64::from(f)),
+    };
+    let a: Vec<Observation> = (0..15).map(obs).collect();
+    let b: Vec<Observation> = (25..40).map(obs).collect();
+    let gdt = recover_gdt(&a, &b, &GdtConfig::default()).unwrap();
+    assert_eq!(gdt.frames, (15..25).collect::<Vec<_>>());
+    for (f, p) in gdt.frames.iter().zip(&gdt.positions) {
+        assert!(
+            (p - obs(*f).position).norm() < 0.5,
+            "GDT at frame {f}: {p:?}"
+        );
+    }
+    // Conditioning on the goal can only shrink the uncertainty of the free prediction from the
+    // end of segment A (filtered with the prior recover_gdt documents).
+    let cfg = GdtConfig::default();
+    let motion =
+        ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: cfg.accel_psd }).unwrap();
+    let sensor = tracker_model::position_measurement(cfg.measurement_variance).unwrap();
+    let prior = Gaussian::new(
+        Vector4::new(a[0].position.x, a[0].position.y, 0.0, 0.0),
+        Matrix4::from_diagonal(&Vector4::new(
+            cfg.measurement_variance,
+            cfg.measurement_variance,
+            cfg.initial_velocity_variance,
+            cfg.initial_velocity_variance,
+        )),
+    )
+    .unwrap();
+    let zs: Vec<_> = a.iter().map(|o| Some(o.position)).collect();
+    let start = filter(&motion, &sensor, &prior, &zs)
+        .unwrap()
+        .steps
+        .last()
+        .unwrap()
+        .filtered
+        .clone();
+    for (k, c) in gdt.covariances.iter().enumerate() {
+        let free = motion.predict_steps(&start, k as u32 + 1);
+        assert!(
+            c[(0, 0)] > 0.0 && c[(0, 0)] < free.covariance()[(0, 0)],
+            "frame {}",
+            gdt.frames[k]
+        );
+    }
+    for method in [
+        Baseline::Linear,
+        Baseline::NaturalCubicSpline,
+        Baseline::LeastSquaresBSpline(BSplineConfig::default()),
+    ] {
+        let r = recover_baseline(&a, &b, &method).unwrap();
+        for (f, p) in r.frames.iter().zip(&r.positions) {
+            assert!(
+                (p - obs(*f).position).norm() < 1e-6,
+                "{method:?} at frame {f}"
+            );
+        }
+    }
+    assert!(recover_gdt(&b, &a, &GdtConfig::default()).is_err());
+    assert!(recover_gdt(&a, &[], &GdtConfig::default()).is_err());
+}
