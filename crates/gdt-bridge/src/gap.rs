@@ -1,16 +1,14 @@
 //! Gap recovery: the trajectory of an object between the end of one track segment (A) and the
 //! start of the next (B), by the goal-directed model or by a baseline.
 
-use nalgebra::{Matrix2, Matrix2x4, Matrix4, Vector2, Vector4};
+use nalgebra::{Matrix2, Matrix2x4, Vector2};
 use serde::{Deserialize, Serialize};
-use tracker_model::{
-    ConstantVelocity2, CvNoise, Frame, Gaussian, Point2, TransitionModel, filter,
-    position_measurement,
-};
+use tracker_model::{ConstantVelocity2, CvNoise, Frame, Point2, TransitionModel};
 
 use crate::baselines::{BSplineConfig, linear, lsq_bspline, natural_cubic_spline};
 use crate::error::{Error, Result};
 use crate::goal::{Goal, GoalDirected};
+use crate::link::end_state;
 
 /// A position observed at a frame.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -82,34 +80,15 @@ fn missing_frames(a: &[Observation], b: &[Observation]) -> Result<Vec<Frame>> {
     Ok((last_a.frame + 1..first_b.frame).collect())
 }
 
-/// Recovers the gap with the goal-directed model: a Kalman filter over segment A gives the
-/// state at A's last frame; the goal is B's first observation, T frames later; the conditioned
+/// Recovers the gap with the goal-directed model: a Kalman filter over segment A (prior: its
+/// first position with the measurement variance, zero velocity with
+/// `initial_velocity_variance`) gives the state at A's last frame; the goal is B's first observation, T frames later; the conditioned
 /// model's forward prediction gives the position and its covariance at every missing frame.
 pub fn recover_gdt(a: &[Observation], b: &[Observation], cfg: &GdtConfig) -> Result<RecoveredGap> {
     let frames = missing_frames(a, b)?;
     let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: cfg.accel_psd })?;
-    let sensor = position_measurement(cfg.measurement_variance)?;
-    let first = a[0];
-    let prior = Gaussian::new(
-        Vector4::new(first.position.x, first.position.y, 0.0, 0.0),
-        Matrix4::from_diagonal(&Vector4::new(
-            cfg.measurement_variance,
-            cfg.measurement_variance,
-            cfg.initial_velocity_variance,
-            cfg.initial_velocity_variance,
-        )),
-    )?;
+    let start = end_state(a, cfg)?;
     let last_a = a[a.len() - 1].frame;
-    let mut measurements = vec![None; (last_a - first.frame + 1) as usize];
-    for o in a {
-        measurements[(o.frame - first.frame) as usize] = Some(o.position);
-    }
-    let run = filter(&motion, &sensor, &prior, &measurements)?;
-    let start = run
-        .steps
-        .last()
-        .map(|s| s.filtered.clone())
-        .ok_or_else(|| Error::Invalid("segment A is empty".into()))?;
     let horizon = (b[0].frame - last_a) as usize;
     let goal = Goal {
         observation: Matrix2x4::identity(),

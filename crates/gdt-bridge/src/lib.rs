@@ -8,9 +8,11 @@
 //! * [`GoalDirected`]: the general form (time-varying A_t, Q_t, goal y_T = H x_T + v), giving
 //!   each step's transition, drift offset and reduced noise, and the conditional initial state;
 //! * [`recover_gdt`]: gap recovery from segments A and B with a constant-velocity model;
-//! * baselines [`linear`], [`natural_cubic_spline`], [`lsq_bspline`] and [`recover_baseline`].
+//! * baselines [`linear`], [`natural_cubic_spline`], [`lsq_bspline`] and [`recover_baseline`];
+//! * segment linking ([`link_segments`]): gated goal-directed likelihood costs and an optimal
+//!   one-to-one assignment.
 //!
-//! Status: segment linking, the goal-state (backward-filter) variant, the seed's evaluation
+//! Status: the goal-state (backward-filter) variant, the seed's evaluation
 //! protocol and the invertible-H / pseudo-inverse special forms are not implemented yet.
 //!
 //! ```
@@ -26,6 +28,7 @@ mod baselines;
 mod error;
 mod gap;
 mod goal;
+mod link;
 
 #[cfg(test)]
 mod tests;
@@ -34,3 +37,4 @@ pub use baselines::{BSplineConfig, linear, lsq_bspline, natural_cubic_spline};
 pub use error::{Error, Result};
 pub use gap::{Baseline, GdtConfig, Observation, RecoveredGap, recover_baseline, recover_gdt};
 pub use goal::{Goal, GoalDirected, GoalStep, Moments};
+pub use link::{Link, LinkConfig, link_costs, link_segments};

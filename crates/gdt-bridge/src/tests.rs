@@ -264,3 +264,106 @@ fn gaps_on_a_straight_path_are_recovered_by_every_method() {
     assert!(recover_gdt(&b, &a, &GdtConfig::default()).is_err());
     assert!(recover_gdt(&a, &[], &GdtConfig::default()).is_err());
 }
+
+// ---------------------------------------------------------------------------------------------
+// Segment linking
+
+fn walker(x0: f64, y0: f64, vx: f64, vy: f64, frames: std::ops::Range<u32>) -> Vec<Observation> {
+    frames
+        .map(|f| Observation {
+            frame: f,
+            position: Point2::new(x0 + vx * f64::from(f), y0 + vy * f64::from(f)),
+        })
+        .collect()
+}
+
+fn link_config() -> LinkConfig {
+    LinkConfig {
+        model: GdtConfig::default(),
+        max_gap_frames: 30,
+        max_speed: 10.0,
+        new_track_cost: 30.0,
+    }
+}
+
+#[test]
+fn crossing_walkers_are_linked_to_their_own_continuations() {
+    // Two walkers cross during their gaps; each is seen in two segments.
+    let segments = vec![
+        walker(0.0, 0.0, 3.0, 2.0, 0..20),
+        walker(0.0, 80.0, 3.0, -2.0, 0..20),
+        walker(0.0, 80.0, 3.0, -2.0, 32..50),
+        walker(0.0, 0.0, 3.0, 2.0, 30..50),
+    ];
+    let links = link_segments(&segments, &link_config()).unwrap();
+    let pairs: Vec<(usize, usize)> = links.iter().map(|l| (l.from, l.to)).collect();
+    assert_eq!(pairs, vec![(0, 3), (1, 2)]);
+}
+
+#[test]
+fn gating_drops_impossible_pairs() {
+    let segments = vec![
+        walker(0.0, 0.0, 1.0, 0.0, 0..10),
+        walker(500.0, 0.0, 1.0, 0.0, 12..20),
+        walker(9.0, 0.0, 1.0, 0.0, 100..110),
+    ];
+    let costs = link_costs(&segments, &link_config()).unwrap();
+    // 0 → 1 is too fast (491 px in 3 frames), 0 → 2 too late (91 frames); 1 → 2 too late.
+    assert!(costs.is_empty(), "{costs:?}");
+    assert!(link_segments(&segments, &link_config()).unwrap().is_empty());
+    assert!(
+        link_costs(
+            &segments,
+            &LinkConfig {
+                max_speed: 0.0,
+                ..link_config()
+            }
+        )
+        .is_err()
+    );
+}
+
+#[test]
+fn linking_is_the_optimal_assignment() {
+    // Segments of three walkers in several pieces; brute force over every one-to-one set of
+    // gated links must not beat the assignment.
+    let segments = vec![
+        walker(0.0, 0.0, 2.0, 1.0, 0..10),
+        walker(10.0, 30.0, 2.0, 0.0, 0..10),
+        walker(5.0, 15.0, 2.0, 0.5, 0..10),
+        walker(0.0, 0.0, 2.0, 1.0, 14..20),
+        walker(10.0, 30.0, 2.0, 0.0, 13..20),
+        walker(5.0, 15.0, 2.1, 0.5, 15..25),
+    ];
+    let cfg = link_config();
+    let costs = link_costs(&segments, &cfg).unwrap();
+    let weight = |c: f64| (cfg.new_track_cost - c).max(0.0);
+    fn best(
+        costs: &[(usize, usize, f64)],
+        k: usize,
+        used_from: u32,
+        used_to: u32,
+        w: &dyn Fn(f64) -> f64,
+    ) -> f64 {
+        if k == costs.len() {
+            return 0.0;
+        }
+        let skip = best(costs, k + 1, used_from, used_to, w);
+        let (i, j, c) = costs[k];
+        if used_from & (1 << i) != 0 || used_to & (1 << j) != 0 {
+            return skip;
+        }
+        skip.max(w(c) + best(costs, k + 1, used_from | (1 << i), used_to | (1 << j), w))
+    }
+    let optimum = best(&costs, 0, 0, 0, &weight);
+    let chosen: f64 = link_segments(&segments, &cfg)
+        .unwrap()
+        .iter()
+        .map(|l| weight(l.cost))
+        .sum();
+    assert!(optimum > 0.0);
+    assert!(
+        (chosen - optimum).abs() < 1e-9,
+        "assignment {chosen} vs brute force {optimum}"
+    );
+}

@@ -1,0 +1,153 @@
+//! Segment linking: which track segments continue which. The seed's pipeline associates
+//! segments before recovering the gaps between them.
+//!
+//! The cost of continuing segment A with segment B is the negative log-likelihood of B's first
+//! observation under A's filtered end state propagated over the gap: the normalising constant
+//! of the goal-directed conditioning, N(y_B; H Φ x_A, H (Φ P_A Φᵀ + Σ Q) Hᵀ + R). Pairs are gated
+//! by the largest gap and the largest speed, and the optimal one-to-one assignment (the `lsap`
+//! crate) keeps the pairs whose cost beats starting a new track.
+
+use nalgebra::Vector4;
+use serde::{Deserialize, Serialize};
+use tracker_model::{
+    ConstantVelocity2, CvNoise, Gaussian, ObservationModel, TransitionModel, filter,
+    position_measurement,
+};
+
+use crate::error::{Error, Result};
+use crate::gap::{GdtConfig, Observation};
+
+/// Linking settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct LinkConfig {
+    /// Motion and noise model of the segments.
+    pub model: GdtConfig,
+    /// Largest number of frames between A's last and B's first observation.
+    pub max_gap_frames: u32,
+    /// Largest speed (distance per frame) between A's last and B's first observation.
+    pub max_speed: f64,
+    /// A link must cost less than this (a negative log-likelihood); otherwise B starts a new
+    /// track.
+    pub new_track_cost: f64,
+}
+
+/// A chosen link: segment `from` continues as segment `to`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Link {
+    /// Index of the earlier segment.
+    pub from: usize,
+    /// Index of the later segment.
+    pub to: usize,
+    /// Negative log-likelihood of the continuation.
+    pub cost: f64,
+}
+
+/// Filters a segment and returns its state at its last frame.
+pub(crate) fn end_state(segment: &[Observation], cfg: &GdtConfig) -> Result<Gaussian<4>> {
+    let first = segment
+        .first()
+        .ok_or_else(|| Error::Invalid("a segment has no observations".into()))?;
+    let last = segment[segment.len() - 1];
+    if segment.windows(2).any(|w| w[1].frame <= w[0].frame) {
+        return Err(Error::Invalid(
+            "segment frames must strictly increase".into(),
+        ));
+    }
+    let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: cfg.accel_psd })?;
+    let sensor = position_measurement(cfg.measurement_variance)?;
+    let prior = Gaussian::new(
+        Vector4::new(first.position.x, first.position.y, 0.0, 0.0),
+        nalgebra::Matrix4::from_diagonal(&Vector4::new(
+            cfg.measurement_variance,
+            cfg.measurement_variance,
+            cfg.initial_velocity_variance,
+            cfg.initial_velocity_variance,
+        )),
+    )?;
+    let mut zs = vec![None; (last.frame - first.frame + 1) as usize];
+    for o in segment {
+        zs[(o.frame - first.frame) as usize] = Some(o.position);
+    }
+    let run = filter(&motion, &sensor, &prior, &zs)?;
+    run.steps
+        .last()
+        .map(|s| s.filtered.clone())
+        .ok_or_else(|| Error::Invalid("empty segment".into()))
+}
+
+/// The cost of every gated (A, B) pair, as (from, to, cost).
+pub fn link_costs(
+    segments: &[Vec<Observation>],
+    cfg: &LinkConfig,
+) -> Result<Vec<(usize, usize, f64)>> {
+    if !(cfg.max_speed.is_finite() && cfg.max_speed > 0.0) {
+        return Err(Error::Invalid(format!(
+            "max_speed {} must be finite and > 0",
+            cfg.max_speed
+        )));
+    }
+    let motion = ConstantVelocity2::new(
+        1.0,
+        CvNoise::WhiteAcceleration {
+            q: cfg.model.accel_psd,
+        },
+    )?;
+    let sensor = position_measurement(cfg.model.measurement_variance)?;
+    let ends = segments
+        .iter()
+        .map(|s| end_state(s, &cfg.model))
+        .collect::<Result<Vec<_>>>()?;
+    let mut out = Vec::new();
+    for (i, a) in segments.iter().enumerate() {
+        let last = a[a.len() - 1];
+        for (j, b) in segments.iter().enumerate() {
+            let Some(first) = b.first() else { continue };
+            if i == j || first.frame <= last.frame || first.frame - last.frame > cfg.max_gap_frames
+            {
+                continue;
+            }
+            let gap = first.frame - last.frame;
+            if (first.position - last.position).norm() > cfg.max_speed * f64::from(gap) {
+                continue;
+            }
+            let predicted = motion.predict_steps(&ends[i], gap);
+            let cost = -sensor
+                .innovation(&predicted, &first.position)?
+                .log_likelihood;
+            out.push((i, j, cost));
+        }
+    }
+    Ok(out)
+}
+
+/// The optimal set of links: each segment continues at most one earlier segment and is
+/// continued by at most one later one, minimising the total cost of the chosen links minus
+/// `new_track_cost` for each (so a link is worth taking only when it costs less than that).
+pub fn link_segments(segments: &[Vec<Observation>], cfg: &LinkConfig) -> Result<Vec<Link>> {
+    let n = segments.len();
+    if n == 0 {
+        return Ok(Vec::new());
+    }
+    let costs = link_costs(segments, cfg)?;
+    // Maximum-weight matching with weight max(0, new_track_cost − cost): pairs that do not beat
+    // a new track weigh 0 and are dropped after the assignment.
+    let mut weights = vec![0.0; n * n];
+    for &(i, j, c) in &costs {
+        weights[i * n + j] = (cfg.new_track_cost - c).max(0.0);
+    }
+    let (rows, cols) = lsap::solve(n, n, &weights, true)
+        .map_err(|e| Error::Invalid(format!("assignment failed: {e:?}")))?;
+    let mut links: Vec<Link> = rows
+        .into_iter()
+        .zip(cols)
+        .filter(|&(i, j)| weights[i * n + j] > 0.0)
+        .filter_map(|(i, j)| {
+            costs
+                .iter()
+                .find(|c| c.0 == i && c.1 == j)
+                .map(|&(from, to, cost)| Link { from, to, cost })
+        })
+        .collect();
+    links.sort_by_key(|l| l.from);
+    Ok(links)
+}
