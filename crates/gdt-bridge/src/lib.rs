@@ -10,10 +10,11 @@
 //! * [`recover_gdt`]: gap recovery from segments A and B with a constant-velocity model;
 //! * baselines [`linear`], [`natural_cubic_spline`], [`lsq_bspline`] and [`recover_baseline`];
 //! * segment linking ([`link_segments`]): gated goal-directed likelihood costs and an optimal
-//!   one-to-one assignment.
+//!   one-to-one assignment;
+//! * the seed's evaluation protocol: [`gaps_from_mask`] turns masked crossings into gaps.
 //!
-//! Status: the goal-state (backward-filter) variant, the seed's evaluation
-//! protocol and the invertible-H / pseudo-inverse special forms are not implemented yet.
+//! Status: the goal-state (backward-filter) variant and the invertible-H / pseudo-inverse
+//! special forms are not implemented yet.
 //!
 //! ```
 //! use gdt_bridge::{GdtConfig, Observation, recover_gdt};
@@ -29,6 +30,7 @@ mod error;
 mod gap;
 mod goal;
 mod link;
+mod protocol;
 
 #[cfg(test)]
 mod tests;
@@ -38,3 +40,4 @@ pub use error::{Error, Result};
 pub use gap::{Baseline, GdtConfig, Observation, RecoveredGap, recover_baseline, recover_gdt};
 pub use goal::{Goal, GoalDirected, GoalStep, Moments};
 pub use link::{Link, LinkConfig, link_costs, link_segments};
+pub use protocol::{GapCase, gaps_from_mask};

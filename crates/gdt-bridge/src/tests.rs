@@ -367,3 +367,53 @@ fn linking_is_the_optimal_assignment() {
         "assignment {chosen} vs brute force {optimum}"
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// The mask protocol
+
+#[test]
+fn mask_crossings_become_gaps_by_the_seed_rules() {
+    use tracker_model::{Region2, Track, TrackId, TrackPoint, TrackSet};
+    let track = |id: u64, xs: &[f64]| {
+        Track::from_points(
+            TrackId(id),
+            xs.iter()
+                .enumerate()
+                .map(|(f, &x)| TrackPoint::at(f as u32, Point2::new(x, 5.0)))
+                .collect(),
+        )
+        .unwrap()
+    };
+    let mask = Region2::new(Vector2::new(10.0, 0.0), Vector2::new(20.0, 10.0)).unwrap();
+    let truth = TrackSet::from_tracks(vec![
+        // Crosses twice: out, in, out, in, out → two gaps.
+        track(1, &[0.0, 5.0, 12.0, 15.0, 25.0, 30.0, 18.0, 26.0]),
+        // Starts inside: no gap for that run.
+        track(2, &[12.0, 15.0, 25.0, 30.0]),
+        // Ends inside: no gap.
+        track(3, &[0.0, 5.0, 12.0]),
+        // Never enters.
+        track(4, &[0.0, 1.0, 2.0]),
+    ])
+    .unwrap();
+    let gaps = gaps_from_mask(&truth, &mask);
+    assert_eq!(gaps.len(), 2);
+    assert_eq!((gaps[0].truth_id, gaps[0].crossing), (TrackId(1), 0));
+    assert_eq!(
+        gaps[0].hidden.iter().map(|o| o.frame).collect::<Vec<_>>(),
+        vec![2, 3]
+    );
+    assert_eq!(gaps[0].before.len(), 2);
+    assert_eq!(
+        gaps[0].after.iter().map(|o| o.frame).collect::<Vec<_>>(),
+        vec![4, 5]
+    );
+    assert_eq!(
+        (gaps[1].crossing, gaps[1].hidden.len(), gaps[1].after.len()),
+        (1, 1, 1)
+    );
+    assert_eq!(
+        gaps[1].before.iter().map(|o| o.frame).collect::<Vec<_>>(),
+        vec![4, 5]
+    );
+}

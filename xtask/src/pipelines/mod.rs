@@ -6,6 +6,7 @@ use indicatif::ProgressBar;
 
 use crate::scenario::{PipelineOutput, Scenario};
 
+mod gdt;
 mod hmm;
 mod kalman;
 mod mot_eval;
@@ -16,6 +17,7 @@ pub type PipelineFn = fn(&Scenario, &ProgressBar) -> Result<PipelineOutput>;
 
 /// Every pipeline by name.
 const PIPELINES: &[(&str, PipelineFn)] = &[
+    ("gdt-gaps", gdt::run),
     ("hmm-tracking", hmm::run),
     ("kalman-crossing", kalman::run),
     ("mot-eval", mot_eval::run),
