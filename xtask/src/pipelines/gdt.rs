@@ -233,7 +233,7 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
             Style::Markers,
             7,
         ),
-        Series::new("truth", frame_x(&case.hidden), Style::Line, 3),
+        Series::new("truth", frame_x(&case.hidden), Style::Line, 5),
     ];
     for (c, (name, r)) in recovered_example.iter().enumerate() {
         let pts = r
@@ -299,7 +299,7 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
             Style::Markers,
             7,
         ),
-        Series::new("truth", xy(&case.hidden), Style::Line, 3),
+        Series::new("truth", xy(&case.hidden), Style::Line, 5),
     ];
     for (c, (name, r)) in recovered_example.iter().enumerate() {
         path_series.push(Series::new(
