@@ -1,7 +1,7 @@
 //! Gap recovery: the trajectory of an object between the end of one track segment (A) and the
 //! start of the next (B), by the goal-directed model or by a baseline.
 
-use nalgebra::{Matrix2, Matrix2x4, Vector2};
+use nalgebra::{Matrix2, Matrix2x4, Matrix4, Vector2, Vector4};
 use serde::{Deserialize, Serialize};
 use tracker_model::{ConstantVelocity2, CvNoise, Frame, Point2, TransitionModel};
 
@@ -85,26 +85,71 @@ fn missing_frames(a: &[Observation], b: &[Observation]) -> Result<Vec<Frame>> {
 /// `initial_velocity_variance`) gives the state at A's last frame; the goal is B's first observation, T frames later; the conditioned
 /// model's forward prediction gives the position and its covariance at every missing frame.
 pub fn recover_gdt(a: &[Observation], b: &[Observation], cfg: &GdtConfig) -> Result<RecoveredGap> {
+    let first_b = b
+        .first()
+        .ok_or_else(|| Error::Invalid("segment B is empty".into()))?;
+    let goal = Goal {
+        observation: Matrix2x4::identity(),
+        value: first_b.position,
+        covariance: Matrix2::identity() * cfg.measurement_variance,
+    };
+    recover_with_goal(a, b, cfg, &goal)
+}
+
+/// Beyond the seed: the goal is B's full state (position and velocity) at its first frame,
+/// estimated by a Kalman filter run backwards in time over all of B, so the recovery also
+/// knows the direction in which the object leaves the gap.
+pub fn recover_gdt_goal_state(
+    a: &[Observation],
+    b: &[Observation],
+    cfg: &GdtConfig,
+) -> Result<RecoveredGap> {
+    let last_b = b
+        .last()
+        .ok_or_else(|| Error::Invalid("segment B is empty".into()))?
+        .frame;
+    // Time reversal: frame f becomes last_b − f, and the velocity changes sign.
+    let reversed: Vec<Observation> = b
+        .iter()
+        .rev()
+        .map(|o| Observation {
+            frame: last_b - o.frame,
+            position: o.position,
+        })
+        .collect();
+    let backward = end_state(&reversed, cfg)?;
+    let flip = Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, -1.0, -1.0));
+    let goal = Goal {
+        observation: Matrix4::identity(),
+        value: flip * backward.mean(),
+        covariance: flip * backward.covariance() * flip,
+    };
+    recover_with_goal(a, b, cfg, &goal)
+}
+
+/// Filters A, conditions the constant-velocity model on `goal` at B's first frame and predicts
+/// the missing frames.
+fn recover_with_goal<const M: usize>(
+    a: &[Observation],
+    b: &[Observation],
+    cfg: &GdtConfig,
+    goal: &Goal<4, M>,
+) -> Result<RecoveredGap> {
     let frames = missing_frames(a, b)?;
     let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: cfg.accel_psd })?;
     let start = end_state(a, cfg)?;
-    let last_a = a[a.len() - 1].frame;
-    let horizon = (b[0].frame - last_a) as usize;
-    let goal = Goal {
-        observation: Matrix2x4::identity(),
-        value: b[0].position,
-        covariance: Matrix2::identity() * cfg.measurement_variance,
-    };
+    let horizon = frames.len() + 1;
     let f = motion.transition_matrix(1);
     let q = motion.process_noise(1);
-    let model = GoalDirected::new(&vec![f; horizon], &vec![q; horizon], &goal, &start)?;
+    let model = GoalDirected::new(&vec![f; horizon], &vec![q; horizon], goal, &start)?;
     let moments = model.predict();
+    let hidden = &moments[1..horizon];
     Ok(RecoveredGap {
-        positions: moments[1..horizon]
+        positions: hidden
             .iter()
             .map(|m| Vector2::new(m.mean[0], m.mean[1]))
             .collect(),
-        covariances: moments[1..horizon]
+        covariances: hidden
             .iter()
             .map(|m| m.covariance.fixed_view::<2, 2>(0, 0).into_owned())
             .collect(),

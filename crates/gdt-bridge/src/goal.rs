@@ -83,6 +83,10 @@ impl<const N: usize> GoalDirected<N> {
             )));
         }
         for (t, (a, q)) in transitions.iter().zip(process_noise).enumerate() {
+            // A time-invariant model repeats the same matrices; check each distinct one once.
+            if t > 0 && *a == transitions[t - 1] && *q == process_noise[t - 1] {
+                continue;
+            }
             check_finite_matrix(a, "transition matrix")?;
             check_positive_semidefinite(q, "process noise")
                 .map_err(|e| Error::Invalid(format!("step {}: {e}", t + 1)))?;

@@ -7,14 +7,15 @@
 //!
 //! * [`GoalDirected`]: the general form (time-varying A_t, Q_t, goal y_T = H x_T + v), giving
 //!   each step's transition, drift offset and reduced noise, and the conditional initial state;
-//! * [`recover_gdt`]: gap recovery from segments A and B with a constant-velocity model;
+//! * [`recover_gdt`]: gap recovery from segments A and B with a constant-velocity model, and
+//!   [`recover_gdt_goal_state`], whose goal is B's full state from a backward filter;
 //! * baselines [`linear`], [`natural_cubic_spline`], [`lsq_bspline`] and [`recover_baseline`];
 //! * segment linking ([`link_segments`]): gated goal-directed likelihood costs and an optimal
 //!   one-to-one assignment;
 //! * the seed's evaluation protocol: [`gaps_from_mask`] turns masked crossings into gaps.
 //!
-//! Status: the goal-state (backward-filter) variant and the invertible-H / pseudo-inverse
-//! special forms are not implemented yet.
+//! Status: the seed's invertible-H / pseudo-inverse special forms (eqs. 11-18) are not
+//! implemented as separate functions yet; the general form covers both cases.
 //!
 //! ```
 //! use gdt_bridge::{GdtConfig, Observation, recover_gdt};
@@ -37,7 +38,10 @@ mod tests;
 
 pub use baselines::{BSplineConfig, linear, lsq_bspline, natural_cubic_spline};
 pub use error::{Error, Result};
-pub use gap::{Baseline, GdtConfig, Observation, RecoveredGap, recover_baseline, recover_gdt};
+pub use gap::{
+    Baseline, GdtConfig, Observation, RecoveredGap, recover_baseline, recover_gdt,
+    recover_gdt_goal_state,
+};
 pub use goal::{Goal, GoalDirected, GoalStep, Moments};
 pub use link::{Link, LinkConfig, link_costs, link_segments};
 pub use protocol::{GapCase, gaps_from_mask};

@@ -44,9 +44,14 @@ pub struct Link {
 
 /// Filters a segment and returns its state at its last frame.
 pub(crate) fn end_state(segment: &[Observation], cfg: &GdtConfig) -> Result<Gaussian<4>> {
-    let first = segment
-        .first()
-        .ok_or_else(|| Error::Invalid("a segment has no observations".into()))?;
+    // Two observations are the least that determine a velocity.
+    if segment.len() < 2 {
+        return Err(Error::Invalid(format!(
+            "a segment needs at least 2 observations to estimate its velocity, got {}",
+            segment.len()
+        )));
+    }
+    let first = segment[0];
     let last = segment[segment.len() - 1];
     if segment.windows(2).any(|w| w[1].frame <= w[0].frame) {
         return Err(Error::Invalid(

@@ -8,6 +8,7 @@ use tracker_model::{
     smooth,
 };
 
+use crate::error::Error;
 use crate::*;
 
 /// Conditioning on the goal is the same as smoothing the free model with the goal as a
@@ -416,4 +417,72 @@ fn mask_crossings_become_gaps_by_the_seed_rules() {
         gaps[1].before.iter().map(|o| o.frame).collect::<Vec<_>>(),
         vec![4, 5]
     );
+}
+
+#[test]
+fn degenerate_inputs_are_clear_errors() {
+    let a = walker(0.0, 0.0, 1.0, 0.0, 0..10);
+    // A gap of zero length: B starts right after A.
+    let b = walker(0.0, 0.0, 1.0, 0.0, 10..20);
+    assert!(
+        matches!(recover_gdt(&a, &b, &GdtConfig::default()), Err(Error::Invalid(m)) if m.contains("nothing is missing"))
+    );
+    // A segment too short for the filter.
+    let one = walker(0.0, 0.0, 1.0, 0.0, 0..1);
+    let later = walker(0.0, 0.0, 1.0, 0.0, 15..20);
+    assert!(
+        matches!(recover_gdt(&one, &later, &GdtConfig::default()), Err(Error::Invalid(m)) if m.contains("at least 2"))
+    );
+    // A singular goal covariance Π_T.
+    let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: 1.0 }).unwrap();
+    let prior = Gaussian::new(Vector4::zeros(), Matrix4::identity()).unwrap();
+    let goal = Goal {
+        observation: Matrix2x4::identity(),
+        value: Vector2::new(1.0, 1.0),
+        covariance: Matrix2::new(1.0, 1.0, 1.0, 1.0),
+    };
+    let r = GoalDirected::new(
+        &[motion.transition_matrix(1); 3],
+        &[motion.process_noise(1); 3],
+        &goal,
+        &prior,
+    );
+    assert!(matches!(
+        r,
+        Err(Error::Model(
+            tracker_model::Error::NotPositiveDefinite { .. }
+        ))
+    ));
+    // A NaN observation.
+    let mut bad = later.clone();
+    bad[2].position.x = f64::NAN;
+    assert!(recover_gdt(&a, &bad, &GdtConfig::default()).is_err());
+}
+
+#[test]
+fn noise_free_constant_velocity_is_recovered_exactly() {
+    // With almost noise-free measurements, a vague velocity prior and no process noise, the
+    // filtered end state is the true state and the goal-conditioned mean is the true line.
+    let a = walker(10.0, 20.0, 2.5, -1.5, 0..12);
+    let b = walker(10.0, 20.0, 2.5, -1.5, 30..40);
+    let cfg = GdtConfig {
+        accel_psd: 1e-12,
+        measurement_variance: 1e-10,
+        initial_velocity_variance: 1e6,
+    };
+    let gdt = recover_gdt(&a, &b, &cfg).unwrap();
+    let goal_state = recover_gdt_goal_state(&a, &b, &cfg).unwrap();
+    let lin = recover_baseline(&a, &b, &Baseline::Linear).unwrap();
+    for (k, f) in gdt.frames.iter().enumerate() {
+        let truth = Point2::new(10.0 + 2.5 * f64::from(*f), 20.0 - 1.5 * f64::from(*f));
+        assert!((gdt.positions[k] - truth).norm() < 1e-6, "GDT at frame {f}");
+        assert!(
+            (goal_state.positions[k] - truth).norm() < 1e-6,
+            "GDT goal state at frame {f}"
+        );
+        assert!(
+            (lin.positions[k] - truth).norm() < 1e-9,
+            "linear at frame {f}"
+        );
+    }
 }

@@ -9,7 +9,7 @@ use anyhow::Result;
 use eval_metrics::{Mae, mae, mmae};
 use gdt_bridge::{
     BSplineConfig, Baseline, GapCase, GdtConfig, Observation, RecoveredGap, gaps_from_mask,
-    recover_baseline, recover_gdt,
+    recover_baseline, recover_gdt, recover_gdt_goal_state,
 };
 use indicatif::ProgressBar;
 use nalgebra::Vector2;
@@ -135,6 +135,12 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
         (
             "GDT",
             Box::new(move |a: &[Observation], b: &[Observation]| recover_gdt(a, b, &gdt_cfg)),
+        ),
+        (
+            "GDT goal state",
+            Box::new(move |a: &[Observation], b: &[Observation]| {
+                recover_gdt_goal_state(a, b, &gdt_cfg)
+            }),
         ),
         (
             "Linear",
