@@ -133,6 +133,88 @@ impl<const N: usize> GoalDirected<N> {
         Ok(Self { initial, steps })
     }
 
+    /// The seed's special forms (seed 003 eqs. 11-15 for an invertible H, 16-18 with the
+    /// pseudo-inverse H⁺ = (HᵀH)⁻¹Hᵀ when only HᵀH is invertible): the goal becomes a target on
+    /// the state, μ = H⁺ y_T with covariance H⁺ Π H⁺ᵀ, and with the backward transitions
+    /// φ(t, T) = Φ(T, t)⁻¹ (every A_t must be invertible),
+    /// Π(t, T) = φ(t, T) (H⁺ Π H⁺ᵀ + P_t) φ(t, T)ᵀ, u_t = Q_t Π(t, T)⁻¹ φ(t, T) (μ − Φ(T, t−1) x_{t−1}),
+    /// ε_t = Q_t − Q_t Π(t, T)⁻¹ Q_t, cov(x_0 | y) = (P_0⁻¹ + Π(0, T)⁻¹)⁻¹ and
+    /// E[x_0 | y] = cov(x_0 | y) (P_0⁻¹ m_0 + Π(0, T)⁻¹ φ(0, T) μ).
+    ///
+    /// With an invertible H this is exactly [`GoalDirected::new`]; with the pseudo-inverse it is
+    /// exact only when Π is a multiple of the identity (ordinary least squares is then the
+    /// generalised one); otherwise it is the seed's approximation.
+    pub fn seed_form<const M: usize>(
+        transitions: &[SMatrix<f64, N, N>],
+        process_noise: &[SMatrix<f64, N, N>],
+        goal: &Goal<N, M>,
+        prior: &Gaussian<N>,
+    ) -> Result<Self> {
+        let horizon = transitions.len();
+        if horizon == 0 || process_noise.len() != horizon {
+            return Err(Error::Invalid(
+                "need T ≥ 1 transitions and as many process-noise matrices".into(),
+            ));
+        }
+        cholesky_checked(&goal.covariance, "goal covariance")?;
+        let h = &goal.observation;
+        let hth_inv = (h.transpose() * h).try_inverse().ok_or_else(|| {
+            Error::Invalid("HᵀH is singular: the goal does not determine the state".into())
+        })?;
+        let h_pinv = hth_inv * h.transpose();
+        let target = h_pinv * goal.value;
+        let target_cov = symmetric(&(h_pinv * goal.covariance * h_pinv.transpose()));
+        let mut phi = vec![SMatrix::<f64, N, N>::identity(); horizon + 1];
+        for t in (1..=horizon).rev() {
+            phi[t - 1] = phi[t] * transitions[t - 1];
+        }
+        let mut acc = vec![SMatrix::<f64, N, N>::zeros(); horizon + 2];
+        for t in (1..=horizon).rev() {
+            acc[t] = acc[t + 1] + phi[t] * process_noise[t - 1] * phi[t].transpose();
+        }
+        // Π(t, T) and φ(t, T); P_0 of the sum is P_1 (no noise enters before step 1).
+        let backward = |t: usize| -> Result<(CholeskyFactor<N>, SMatrix<f64, N, N>)> {
+            let back = phi[t].try_inverse().ok_or_else(|| {
+                Error::Invalid(format!(
+                    "Φ(T, {t}) is singular: the seed form needs invertible transitions"
+                ))
+            })?;
+            let p = acc[t.max(1)];
+            let pi = symmetric(&(back * (target_cov + p) * back.transpose()));
+            Ok((CholeskyFactor::new(&pi, "Π(t, T)")?, back))
+        };
+        let steps = (1..=horizon)
+            .map(|t| {
+                let q = &process_noise[t - 1];
+                let (pi, back) = backward(t)?;
+                let gain = q * pi.solve(&back);
+                Ok(GoalStep {
+                    transition: transitions[t - 1] - gain * phi[t - 1],
+                    offset: gain * target,
+                    covariance: symmetric(&(q - q * pi.solve(&q.transpose()))),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let (pi0, back0) = backward(0)?;
+        let p0_inv =
+            cholesky_checked(prior.covariance(), "prior covariance")?
+                .solve(&SMatrix::<f64, N, N>::identity());
+        let pi0_inv = pi0.solve(&SMatrix::<f64, N, N>::identity());
+        let cov0 = CholeskyFactor::new(
+            &symmetric(&(p0_inv + pi0_inv)),
+            "conditional initial covariance",
+        )?
+        .solve(&SMatrix::<f64, N, N>::identity());
+        let mean0 = cov0 * (p0_inv * prior.mean() + pi0_inv * back0 * target);
+        Ok(Self {
+            initial: Moments {
+                mean: mean0,
+                covariance: symmetric(&cov0),
+            },
+            steps,
+        })
+    }
+
     /// The marginal moments of x_0..x_T under the conditioned model (forward prediction).
     pub fn predict(&self) -> Vec<Moments<N>> {
         let mut out = Vec::with_capacity(self.steps.len() + 1);

@@ -14,8 +14,8 @@
 //!   one-to-one assignment;
 //! * the seed's evaluation protocol: [`gaps_from_mask`] turns masked crossings into gaps.
 //!
-//! Status: the seed's invertible-H / pseudo-inverse special forms (eqs. 11-18) are not
-//! implemented as separate functions yet; the general form covers both cases.
+//! The seed's special forms (eqs. 11-18: invertible H, pseudo-inverse) are
+//! [`GoalDirected::seed_form`]; tests show where they equal the general form.
 //!
 //! ```
 //! use gdt_bridge::{GdtConfig, Observation, recover_gdt};

@@ -486,3 +486,67 @@ fn noise_free_constant_velocity_is_recovered_exactly() {
         );
     }
 }
+
+#[test]
+fn the_seeds_special_forms_agree_with_the_general_form() {
+    let a: Vec<SMatrix<f64, 2, 2>> = (0..6)
+        .map(|t| SMatrix::<f64, 2, 2>::new(1.0, 0.3 + 0.05 * t as f64, -0.1, 0.95))
+        .collect();
+    let q: Vec<SMatrix<f64, 2, 2>> = (0..6)
+        .map(|t| SMatrix::<f64, 2, 2>::new(0.3, 0.05, 0.05, 0.2 + 0.01 * t as f64))
+        .collect();
+    let prior = Gaussian::new(Vector2::new(0.2, -0.4), Matrix2::new(0.8, 0.1, 0.1, 0.6)).unwrap();
+    let close = |x: &GoalDirected<2>, y: &GoalDirected<2>| {
+        let (mx, my) = (x.predict(), y.predict());
+        mx.iter().zip(&my).all(|(p, q)| {
+            (p.mean - q.mean).amax() < 1e-9 && (p.covariance - q.covariance).amax() < 1e-9
+        })
+    };
+    // Invertible H (eqs. 11-15): exactly the general form.
+    let goal = Goal {
+        observation: Matrix2::new(2.0, 0.5, -0.3, 1.5),
+        value: Vector2::new(4.0, 1.0),
+        covariance: Matrix2::new(0.4, 0.1, 0.1, 0.3),
+    };
+    assert!(close(
+        &GoalDirected::new(&a, &q, &goal, &prior).unwrap(),
+        &GoalDirected::seed_form(&a, &q, &goal, &prior).unwrap()
+    ));
+    // Pseudo-inverse (eqs. 16-18), three readings of a 2-D state, Π = σ² I: exact.
+    let h = SMatrix::<f64, 3, 2>::new(1.0, 0.0, 0.0, 1.0, 1.0, 1.0);
+    let tall = Goal {
+        observation: h,
+        value: nalgebra::Vector3::new(3.0, 1.0, 4.2),
+        covariance: nalgebra::Matrix3::identity() * 0.5,
+    };
+    assert!(close(
+        &GoalDirected::new(&a, &q, &tall, &prior).unwrap(),
+        &GoalDirected::seed_form(&a, &q, &tall, &prior).unwrap()
+    ));
+    // With correlated Π it is the seed's approximation and differs.
+    let skew = Goal {
+        covariance: nalgebra::Matrix3::new(0.5, 0.4, 0.0, 0.4, 0.5, 0.0, 0.0, 0.0, 2.0),
+        ..tall
+    };
+    assert!(!close(
+        &GoalDirected::new(&a, &q, &skew, &prior).unwrap(),
+        &GoalDirected::seed_form(&a, &q, &skew, &prior).unwrap()
+    ));
+    // A position-only goal on a 4-D state has a singular HᵀH: the seed form refuses it.
+    let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: 1.0 }).unwrap();
+    let p4 = Gaussian::new(Vector4::zeros(), Matrix4::identity()).unwrap();
+    let pos = Goal {
+        observation: Matrix2x4::identity(),
+        value: Vector2::new(1.0, 1.0),
+        covariance: Matrix2::identity(),
+    };
+    assert!(
+        GoalDirected::seed_form(
+            &[motion.transition_matrix(1); 3],
+            &[motion.process_noise(1); 3],
+            &pos,
+            &p4
+        )
+        .is_err()
+    );
+}
