@@ -30,6 +30,16 @@ pub struct GdtConfig {
     pub initial_velocity_variance: f64,
 }
 
+impl GdtConfig {
+    /// The constant-velocity model (one frame per step) these settings describe.
+    pub fn motion(&self) -> Result<ConstantVelocity2> {
+        Ok(ConstantVelocity2::new(
+            1.0,
+            CvNoise::WhiteAcceleration { q: self.accel_psd },
+        )?)
+    }
+}
+
 impl Default for GdtConfig {
     fn default() -> Self {
         Self {
@@ -136,7 +146,7 @@ fn recover_with_goal<const M: usize>(
     goal: &Goal<4, M>,
 ) -> Result<RecoveredGap> {
     let frames = missing_frames(a, b)?;
-    let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: cfg.accel_psd })?;
+    let motion = cfg.motion()?;
     let start = end_state(a, cfg)?;
     let horizon = frames.len() + 1;
     let f = motion.transition_matrix(1);

@@ -95,16 +95,7 @@ impl<const N: usize> GoalDirected<N> {
         check_finite_matrix(&goal.value, "goal value")?;
         cholesky_checked(&goal.covariance, "goal covariance")?;
 
-        // phi[t] = Φ(T, t) for t = 0..T, built backwards: Φ(T, T) = I, Φ(T, t−1) = Φ(T, t) A_t.
-        let mut phi = vec![SMatrix::<f64, N, N>::identity(); horizon + 1];
-        for t in (1..=horizon).rev() {
-            phi[t - 1] = phi[t] * transitions[t - 1];
-        }
-        // acc[t] = P_t = Σ_{s=t}^{T} Φ(T, s) Q_s Φ(T, s)ᵀ for t = 1..T, and P_{T+1} = 0.
-        let mut acc = vec![SMatrix::<f64, N, N>::zeros(); horizon + 2];
-        for t in (1..=horizon).rev() {
-            acc[t] = acc[t + 1] + phi[t] * process_noise[t - 1] * phi[t].transpose();
-        }
+        let (phi, acc) = propagators(transitions, process_noise);
         let h = &goal.observation;
         let steps = (1..=horizon)
             .map(|t| {
@@ -164,14 +155,7 @@ impl<const N: usize> GoalDirected<N> {
         let h_pinv = hth_inv * h.transpose();
         let target = h_pinv * goal.value;
         let target_cov = symmetric(&(h_pinv * goal.covariance * h_pinv.transpose()));
-        let mut phi = vec![SMatrix::<f64, N, N>::identity(); horizon + 1];
-        for t in (1..=horizon).rev() {
-            phi[t - 1] = phi[t] * transitions[t - 1];
-        }
-        let mut acc = vec![SMatrix::<f64, N, N>::zeros(); horizon + 2];
-        for t in (1..=horizon).rev() {
-            acc[t] = acc[t + 1] + phi[t] * process_noise[t - 1] * phi[t].transpose();
-        }
+        let (phi, acc) = propagators(transitions, process_noise);
         // Π(t, T) and φ(t, T); P_0 of the sum is P_1 (no noise enters before step 1).
         let backward = |t: usize| -> Result<(CholeskyFactor<N>, SMatrix<f64, N, N>)> {
             let back = phi[t].try_inverse().ok_or_else(|| {
@@ -230,6 +214,24 @@ impl<const N: usize> GoalDirected<N> {
         }
         out
     }
+}
+
+/// Φ(T, t) for t = 0..T (built backwards: Φ(T, T) = I, Φ(T, t−1) = Φ(T, t) A_t) and the
+/// accumulated noise P_t = Σ_{s=t}^{T} Φ(T, s) Q_s Φ(T, s)ᵀ for t = 1..T (with P_{T+1} = 0).
+fn propagators<const N: usize>(
+    transitions: &[SMatrix<f64, N, N>],
+    process_noise: &[SMatrix<f64, N, N>],
+) -> (Vec<SMatrix<f64, N, N>>, Vec<SMatrix<f64, N, N>>) {
+    let horizon = transitions.len();
+    let mut phi = vec![SMatrix::<f64, N, N>::identity(); horizon + 1];
+    for t in (1..=horizon).rev() {
+        phi[t - 1] = phi[t] * transitions[t - 1];
+    }
+    let mut acc = vec![SMatrix::<f64, N, N>::zeros(); horizon + 2];
+    for t in (1..=horizon).rev() {
+        acc[t] = acc[t + 1] + phi[t] * process_noise[t - 1] * phi[t].transpose();
+    }
+    (phi, acc)
 }
 
 fn symmetric<const N: usize>(m: &SMatrix<f64, N, N>) -> SMatrix<f64, N, N> {

@@ -9,10 +9,7 @@
 
 use nalgebra::Vector4;
 use serde::{Deserialize, Serialize};
-use tracker_model::{
-    ConstantVelocity2, CvNoise, Gaussian, ObservationModel, TransitionModel, filter,
-    position_measurement,
-};
+use tracker_model::{Gaussian, ObservationModel, TransitionModel, filter, position_measurement};
 
 use crate::error::{Error, Result};
 use crate::gap::{GdtConfig, Observation};
@@ -58,7 +55,7 @@ pub(crate) fn end_state(segment: &[Observation], cfg: &GdtConfig) -> Result<Gaus
             "segment frames must strictly increase".into(),
         ));
     }
-    let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: cfg.accel_psd })?;
+    let motion = cfg.motion()?;
     let sensor = position_measurement(cfg.measurement_variance)?;
     let prior = Gaussian::new(
         Vector4::new(first.position.x, first.position.y, 0.0, 0.0),
@@ -91,12 +88,7 @@ pub fn link_costs(
             cfg.max_speed
         )));
     }
-    let motion = ConstantVelocity2::new(
-        1.0,
-        CvNoise::WhiteAcceleration {
-            q: cfg.model.accel_psd,
-        },
-    )?;
+    let motion = cfg.model.motion()?;
     let sensor = position_measurement(cfg.model.measurement_variance)?;
     let ends = segments
         .iter()
