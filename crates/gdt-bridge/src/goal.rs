@@ -74,27 +74,8 @@ impl<const N: usize> GoalDirected<N> {
         goal: &Goal<N, M>,
         prior: &Gaussian<N>,
     ) -> Result<Self> {
+        check_model(transitions, process_noise, goal)?;
         let horizon = transitions.len();
-        if horizon == 0 || process_noise.len() != horizon {
-            return Err(Error::Invalid(format!(
-                "need T ≥ 1 transitions and as many process-noise matrices (got {} and {})",
-                horizon,
-                process_noise.len()
-            )));
-        }
-        for (t, (a, q)) in transitions.iter().zip(process_noise).enumerate() {
-            // A time-invariant model repeats the same matrices; check each distinct one once.
-            if t > 0 && *a == transitions[t - 1] && *q == process_noise[t - 1] {
-                continue;
-            }
-            check_finite_matrix(a, "transition matrix")?;
-            check_positive_semidefinite(q, "process noise")
-                .map_err(|e| Error::Invalid(format!("step {}: {e}", t + 1)))?;
-        }
-        check_finite_matrix(&goal.observation, "goal observation matrix")?;
-        check_finite_matrix(&goal.value, "goal value")?;
-        cholesky_checked(&goal.covariance, "goal covariance")?;
-
         let (phi, acc) = propagators(transitions, process_noise);
         let h = &goal.observation;
         let steps = (1..=horizon)
@@ -141,13 +122,8 @@ impl<const N: usize> GoalDirected<N> {
         goal: &Goal<N, M>,
         prior: &Gaussian<N>,
     ) -> Result<Self> {
+        check_model(transitions, process_noise, goal)?;
         let horizon = transitions.len();
-        if horizon == 0 || process_noise.len() != horizon {
-            return Err(Error::Invalid(
-                "need T ≥ 1 transitions and as many process-noise matrices".into(),
-            ));
-        }
-        cholesky_checked(&goal.covariance, "goal covariance")?;
         let h = &goal.observation;
         let hth_inv = (h.transpose() * h).try_inverse().ok_or_else(|| {
             Error::Invalid("HᵀH is singular: the goal does not determine the state".into())
@@ -214,6 +190,37 @@ impl<const N: usize> GoalDirected<N> {
         }
         out
     }
+}
+
+/// Checks the model and goal once for both forms: T ≥ 1 steps with as many noise matrices,
+/// finite transitions, positive semi-definite process noise (each distinct matrix once: a
+/// time-invariant model repeats the same ones), and a finite goal with positive-definite Π.
+fn check_model<const N: usize, const M: usize>(
+    transitions: &[SMatrix<f64, N, N>],
+    process_noise: &[SMatrix<f64, N, N>],
+    goal: &Goal<N, M>,
+) -> Result<()> {
+    let horizon = transitions.len();
+    if horizon == 0 || process_noise.len() != horizon {
+        return Err(Error::Invalid(format!(
+            "need T ≥ 1 transitions and as many process-noise matrices (got {} and {})",
+            horizon,
+            process_noise.len()
+        )));
+    }
+    for (t, (a, q)) in transitions.iter().zip(process_noise).enumerate() {
+        // A time-invariant model repeats the same matrices; check each distinct one once.
+        if t > 0 && *a == transitions[t - 1] && *q == process_noise[t - 1] {
+            continue;
+        }
+        check_finite_matrix(a, "transition matrix")?;
+        check_positive_semidefinite(q, "process noise")
+            .map_err(|e| Error::Invalid(format!("step {}: {e}", t + 1)))?;
+    }
+    check_finite_matrix(&goal.observation, "goal observation matrix")?;
+    check_finite_matrix(&goal.value, "goal value")?;
+    cholesky_checked(&goal.covariance, "goal covariance")?;
+    Ok(())
 }
 
 /// Φ(T, t) for t = 0..T (built backwards: Φ(T, T) = I, Φ(T, t−1) = Φ(T, t) A_t) and the
