@@ -554,21 +554,21 @@ impl Hmm {
     pub fn sample<R: Rng + ?Sized>(&self, len: usize, rng: &mut R) -> (Vec<usize>, Vec<usize>) {
         let mut states = Vec::with_capacity(len);
         let mut obs = Vec::with_capacity(len);
-        let n = self.n_states();
         let m = self.n_symbols;
+        // One buffer for the current transition row, reused at every step.
+        let mut row = Vec::new();
         for t in 0..len {
             let state = if t == 0 {
                 categorical(self.initial.iter().copied().enumerate(), rng)
             } else {
-                let prev = states[t - 1];
-                let mut row = Vec::new();
+                row.clear();
                 self.transitions
-                    .for_each_in_row(prev, |j, a, _| row.push((j, a)));
-                categorical(row.into_iter(), rng)
+                    .for_each_in_row(states[t - 1], |j, a, _| row.push((j, a)));
+                categorical(row.iter().copied(), rng)
             };
-            states.push(state.min(n - 1));
+            states.push(state);
             let e = &self.emissions[state * m..(state + 1) * m];
-            obs.push(categorical(e.iter().copied().enumerate(), rng).min(m - 1));
+            obs.push(categorical(e.iter().copied().enumerate(), rng));
         }
         (states, obs)
     }

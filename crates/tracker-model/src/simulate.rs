@@ -170,7 +170,7 @@ impl Simulator {
         let cfg = &self.config;
         let f = cfg.motion.transition_matrix(1);
         let mut alive: Vec<Alive> = Vec::new();
-        let mut finished = TrackSet::new();
+        let mut finished: Vec<Track> = Vec::new();
         let mut scans = Vec::with_capacity(cfg.n_scans as usize);
         let mut next_id = 0u64;
         for frame in 0..cfg.n_scans {
@@ -179,7 +179,7 @@ impl Simulator {
                 let mut survivors = Vec::with_capacity(alive.len());
                 for mut target in alive.drain(..) {
                     if rng.random_bool(cfg.p_disappear) {
-                        finished.push(target.track)?;
+                        finished.push(target.track);
                         continue;
                     }
                     target.state = f * target.state + self.process_factor * standard_normal(rng);
@@ -236,12 +236,11 @@ impl Simulator {
             });
         }
         for target in alive {
-            finished.push(target.track)?;
+            finished.push(target.track);
         }
-        let mut tracks = finished.tracks().to_vec();
-        tracks.sort_by_key(Track::id);
+        finished.sort_by_key(Track::id);
         Ok(Simulation {
-            truth: TrackSet::from_tracks(tracks)?,
+            truth: TrackSet::from_tracks(finished)?,
             scans,
         })
     }
