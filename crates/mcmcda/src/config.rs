@@ -1,0 +1,324 @@
+//! The MCMCDA model and sampler parameters (TAC 2009 §II, §IV), checked once into the
+//! log-constants the sampler uses.
+
+use nalgebra::{Matrix2, Matrix4};
+use serde::{Deserialize, Serialize};
+use tracker_model::{ConstantVelocity2, TransitionModel, check_positive_semidefinite};
+
+use crate::error::{Error, Result};
+
+/// The eight MCMCDA moves, in the paper's order (Fig. 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Move {
+    /// A new track from free measurements.
+    Birth,
+    /// A track's measurements become false alarms.
+    Death,
+    /// A track splits into two.
+    Split,
+    /// Two tracks join.
+    Merge,
+    /// A track grows past its last measurement.
+    Extension,
+    /// A track's tail becomes false alarms.
+    Reduction,
+    /// A track's tail is re-grown.
+    Update,
+    /// Two tracks exchange tails.
+    Switch,
+}
+
+impl Move {
+    /// All moves in the paper's order.
+    pub const ALL: [Move; 8] = [
+        Move::Birth,
+        Move::Death,
+        Move::Split,
+        Move::Merge,
+        Move::Extension,
+        Move::Reduction,
+        Move::Update,
+        Move::Switch,
+    ];
+
+    /// Position in [`Move::ALL`].
+    pub fn index(self) -> usize {
+        self as usize
+    }
+
+    /// Whether the move can be proposed when the partition has `k` tracks (birth is the only
+    /// move with no track; merge and switch need two).
+    pub fn allowed_with(self, k: usize) -> bool {
+        match self {
+            Move::Birth => true,
+            Move::Merge | Move::Switch => k >= 2,
+            _ => k >= 1,
+        }
+    }
+}
+
+/// ζ(d): the distribution of the gap d ∈ {1..d̄} drawn when a track grows. The paper says only
+/// that it is "computed based on p_d".
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GapDistribution {
+    /// ζ(d) ∝ p_d (1 − p_d)^(d−1): the chance that the next detection comes d scans later
+    /// (default).
+    Geometric,
+    /// ζ(d) = 1/d̄.
+    Uniform,
+}
+
+/// How a track's Kalman filter starts (the paper defers this to a technical report).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrackInit {
+    /// Position N(y₁, R), velocity N(0, σ_v² I) with σ_v² = `velocity_variance`, or v̄²/3 (the
+    /// variance of a speed uniform on the disc of radius v̄) when unset; likelihood terms from
+    /// the second measurement on (default).
+    FirstMeasurement {
+        /// Per-axis variance of the initial velocity.
+        velocity_variance: Option<f64>,
+    },
+    /// The authors' code: x₀ = [y₁; (y₂ − y₁)/(Δ T_s)] with covariance `initial_covariance`,
+    /// the second measurement scored with its (zero) innovation, and each track paying the
+    /// density 1/(π v̄²) of its initial velocity.
+    TwoPoint {
+        /// P₀ (the authors use the identity).
+        initial_covariance: Matrix4<f64>,
+    },
+}
+
+/// Weights of the move distribution ξ_K; moves not allowed with K tracks get weight 0 and
+/// the rest are renormalised. The paper's experiments use uniform weights (default).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct MoveWeights(pub [f64; 8]);
+
+impl Default for MoveWeights {
+    fn default() -> Self {
+        Self([1.0; 8])
+    }
+}
+
+/// Everything that defines the MCMCDA posterior and its proposal. Defaults are the TAC 2009
+/// batch experiment (region [0, 1000]², 10 scans, p_d = 0.9, λ_f V = 1, p_z = 1e-4, d̄ = 5,
+/// v̄ = 100, Q = R = diag(100, 100)) with 10 targets.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct McmcdaConfig {
+    /// Volume V of the surveillance region.
+    pub volume: f64,
+    /// Expected births per scan, λ_b V.
+    pub births_per_scan: f64,
+    /// Expected false alarms per scan, λ_f V.
+    pub clutter_per_scan: f64,
+    /// Probability p_z that a target disappears between scans.
+    pub p_disappear: f64,
+    /// Detection probability p_d.
+    pub p_detect: f64,
+    /// Target motion; its sampling period is the scan period T_s.
+    pub motion: ConstantVelocity2,
+    /// Position-measurement noise covariance R.
+    pub measurement_noise: Matrix2<f64>,
+    /// d̄: the most scans between two consecutive measurements of one track.
+    pub max_gap: u32,
+    /// v̄: the largest speed (length per unit time); two measurements d scans apart can belong
+    /// to one track only if they are at most d·v̄·T_s apart.
+    pub max_speed: f64,
+    /// γ: the probability that growing a track stops before each further measurement (the
+    /// paper leaves it open; the authors' code has 0.5).
+    pub stop_probability: f64,
+    /// ζ, the gap distribution.
+    pub gap_distribution: GapDistribution,
+    /// ξ, the move weights.
+    pub move_weights: MoveWeights,
+    /// How track filters start.
+    pub track_init: TrackInit,
+}
+
+impl Default for McmcdaConfig {
+    fn default() -> Self {
+        Self {
+            volume: 1.0e6,
+            births_per_scan: 1.0,
+            clutter_per_scan: 1.0,
+            p_disappear: 1e-4,
+            p_detect: 0.9,
+            motion: ConstantVelocity2::mcmcda(1.0, 100.0)
+                .unwrap_or_else(|_| unreachable!("constant model is valid")),
+            measurement_noise: Matrix2::identity() * 100.0,
+            max_gap: 5,
+            max_speed: 100.0,
+            stop_probability: 0.5,
+            gap_distribution: GapDistribution::Geometric,
+            move_weights: MoveWeights::default(),
+            track_init: TrackInit::FirstMeasurement {
+                velocity_variance: None,
+            },
+        }
+    }
+}
+
+/// A checked configuration with everything the sampler needs precomputed: log-constants of
+/// the posterior, ζ, and the Kalman matrices for every gap 1..d̄.
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub(crate) config: McmcdaConfig,
+    /// Constant part of a track's weight: log λ_b (+ the two-point velocity density).
+    pub(crate) log_birth: f64,
+    pub(crate) log_p_z: f64,
+    pub(crate) log_survive: f64,
+    /// log p_d − log λ_f: the gain of explaining one measurement by a track.
+    pub(crate) log_detect_vs_clutter: f64,
+    pub(crate) log_miss: f64,
+    /// log λ_f, per measurement, for the all-false-alarm baseline.
+    pub(crate) log_clutter_density: f64,
+    /// ζ(d) for d = 1..d̄ at index d − 1, its logarithm and cumulative sums.
+    pub(crate) zeta: Vec<f64>,
+    pub(crate) log_zeta: Vec<f64>,
+    pub(crate) zeta_cdf: Vec<f64>,
+    pub(crate) log_go_on: f64,
+    /// Per gap d (index d − 1): Q(d).
+    pub(crate) process_noise: Vec<Matrix4<f64>>,
+    /// Scan-period length radius per scan of gap: v̄·T_s.
+    pub(crate) radius_per_scan: f64,
+    pub(crate) initial_velocity_variance: f64,
+}
+
+fn check_probability_open(v: f64, name: &'static str) -> Result<()> {
+    if v.is_finite() && v > 0.0 && v < 1.0 {
+        Ok(())
+    } else {
+        Err(Error::Model(tracker_model::Error::InvalidParameter {
+            name,
+            reason: format!("{v} must lie strictly between 0 and 1"),
+        }))
+    }
+}
+
+fn check_positive(v: f64, name: &'static str) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::Model(tracker_model::Error::InvalidParameter {
+            name,
+            reason: format!("{v} must be finite and > 0"),
+        }))
+    }
+}
+
+impl McmcdaConfig {
+    /// Checks every field. Probabilities must lie strictly inside (0, 1) and rates must be
+    /// positive: these are the conditions of the paper's Theorem 4 (ergodicity), and they keep
+    /// every logarithm finite.
+    pub fn check(&self) -> Result<Model> {
+        check_positive(self.volume, "volume")?;
+        check_positive(self.births_per_scan, "births_per_scan")?;
+        check_positive(self.clutter_per_scan, "clutter_per_scan")?;
+        check_probability_open(self.p_disappear, "p_disappear")?;
+        check_probability_open(self.p_detect, "p_detect")?;
+        check_probability_open(self.stop_probability, "stop_probability")?;
+        check_positive(self.max_speed, "max_speed")?;
+        if self.max_gap == 0 || self.max_gap > 64 {
+            return Err(Error::Invalid(format!(
+                "max_gap is {}; it must lie in 1..=64",
+                self.max_gap
+            )));
+        }
+        tracker_model::cholesky_checked(&self.measurement_noise, "measurement_noise")?;
+        let weights = &self.move_weights.0;
+        if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) || weights[0] <= 0.0 {
+            return Err(Error::Invalid(format!(
+                "move weights {weights:?} must be finite and >= 0, with birth > 0"
+            )));
+        }
+        let dt = self.motion.dt_s();
+        let radius_per_scan = self.max_speed * dt;
+        let initial_velocity_variance = match self.track_init {
+            TrackInit::FirstMeasurement {
+                velocity_variance: Some(v),
+            } => {
+                check_positive(v, "velocity_variance")?;
+                v
+            }
+            TrackInit::FirstMeasurement {
+                velocity_variance: None,
+            } => self.max_speed * self.max_speed / 3.0,
+            TrackInit::TwoPoint { initial_covariance } => {
+                check_positive_semidefinite(&initial_covariance, "initial_covariance")?;
+                0.0
+            }
+        };
+        let d_bar = self.max_gap as usize;
+        let raw: Vec<f64> = (0..d_bar)
+            .map(|i| match self.gap_distribution {
+                GapDistribution::Geometric => self.p_detect * (1.0 - self.p_detect).powi(i as i32),
+                GapDistribution::Uniform => 1.0,
+            })
+            .collect();
+        let total: f64 = raw.iter().sum();
+        let zeta: Vec<f64> = raw.iter().map(|z| z / total).collect();
+        let mut zeta_cdf = Vec::with_capacity(d_bar);
+        let mut acc = 0.0;
+        for z in &zeta {
+            acc += z;
+            zeta_cdf.push(acc);
+        }
+        let velocity_term = match self.track_init {
+            TrackInit::TwoPoint { .. } => -(std::f64::consts::PI * self.max_speed.powi(2)).ln(),
+            TrackInit::FirstMeasurement { .. } => 0.0,
+        };
+        let volume = self.volume;
+        Ok(Model {
+            log_birth: (self.births_per_scan / volume).ln() + velocity_term,
+            log_p_z: self.p_disappear.ln(),
+            log_survive: (-self.p_disappear).ln_1p(),
+            log_detect_vs_clutter: self.p_detect.ln() - (self.clutter_per_scan / volume).ln(),
+            log_miss: (-self.p_detect).ln_1p(),
+            log_clutter_density: (self.clutter_per_scan / volume).ln(),
+            log_zeta: zeta.iter().map(|z| z.ln()).collect(),
+            zeta,
+            zeta_cdf,
+            log_go_on: (-self.stop_probability).ln_1p(),
+            process_noise: (1..=self.max_gap)
+                .map(|d| self.motion.process_noise(d))
+                .collect(),
+            radius_per_scan,
+            initial_velocity_variance,
+            config: self.clone(),
+        })
+    }
+}
+
+impl Model {
+    /// The configuration this model was checked from.
+    pub fn config(&self) -> &McmcdaConfig {
+        &self.config
+    }
+
+    /// d̄.
+    pub fn max_gap(&self) -> u32 {
+        self.config.max_gap
+    }
+
+    /// ζ(d), d = 1..d̄.
+    pub fn gap_probabilities(&self) -> &[f64] {
+        &self.zeta
+    }
+
+    /// ξ_K(m): the probability of proposing `m` when the partition has `k` tracks.
+    pub fn move_probability(&self, m: Move, k: usize) -> f64 {
+        if !m.allowed_with(k) {
+            return 0.0;
+        }
+        let w = &self.config.move_weights.0;
+        let total: f64 = Move::ALL
+            .iter()
+            .filter(|m| m.allowed_with(k))
+            .map(|m| w[m.index()])
+            .sum();
+        w[m.index()] / total
+    }
+}

@@ -1,0 +1,42 @@
+//! # mcmcda
+//!
+//! Markov chain Monte Carlo data association (Oh, Russell & Sastry, IEEE TAC 54(3), 2009) for
+//! an unknown number of targets in clutter:
+//!
+//! * [`McmcdaConfig`] → [`Model`]: the posterior of TAC eq. 9 and the proposal parameters;
+//! * [`Problem`]: measurements by scan with the neighbourhoods L(y, t, d) (eq. 27);
+//! * [`Partition`]: a feasible ω with incremental log posterior;
+//! * [`Chain`] / [`run_chains`]: Algorithm 3 with all eight moves and exact proposal
+//!   probabilities, MAP and MMSE, independent chains in parallel;
+//! * [`reference`]: the log posterior from per-scan counts and partition enumeration.
+//!
+//! ```
+//! use mcmcda::{McmcdaConfig, Partition, Problem, run_chains};
+//! use rand::SeedableRng;
+//! use tracker_model::SimulationConfig;
+//! let sim = SimulationConfig::default().check().unwrap()
+//!     .simulate(&mut rand_chacha::ChaCha8Rng::seed_from_u64(1)).unwrap();
+//! let model = McmcdaConfig::default().check().unwrap();
+//! let problem = Problem::from_scans(&model, &sim.scans).unwrap();
+//! let start = Partition::empty(&model, &problem, 0..=problem.n_scans() - 1).unwrap();
+//! let run = run_chains(&start, 2, 20_000, 7).unwrap();
+//! assert!(!run.tracks.is_empty());
+//! ```
+
+mod config;
+mod error;
+mod partition;
+mod problem;
+mod proposal;
+pub mod reference;
+mod sampler;
+mod track_filter;
+
+#[cfg(test)]
+mod tests;
+
+pub use config::{GapDistribution, McmcdaConfig, Model, Move, MoveWeights, TrackInit};
+pub use error::{Error, Result};
+pub use partition::Partition;
+pub use problem::{MeasId, Problem};
+pub use sampler::{Chain, McmcdaRun, MoveStats, run_chains};

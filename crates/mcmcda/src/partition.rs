@@ -1,0 +1,259 @@
+//! A partition ω of the measurements of a window of scans into false alarms and tracks, with
+//! each track's cached Kalman nodes and posterior term, so that the log posterior changes by
+//! the terms of the tracks a move touches and nothing else.
+
+use std::ops::RangeInclusive;
+
+use crate::config::Model;
+use crate::error::{Error, Result};
+use crate::problem::{MeasId, Problem};
+use crate::track_filter::Node;
+
+/// `owner` value of a measurement in the window that no track holds (a false alarm).
+pub(crate) const FREE: u32 = u32::MAX;
+/// `owner` value of a measurement outside the window.
+pub(crate) const OUTSIDE: u32 = u32::MAX - 1;
+
+/// One track: its measurements in scan order, filtered nodes, and its posterior term.
+#[derive(Debug, Clone)]
+pub(crate) struct TrackState {
+    pub(crate) meas: Vec<MeasId>,
+    pub(crate) nodes: Vec<Node>,
+    pub(crate) weight: f64,
+}
+
+/// A feasible partition of the measurements in a window of scans (the chain's state ω).
+#[derive(Debug, Clone)]
+pub struct Partition<'a> {
+    pub(crate) model: &'a Model,
+    pub(crate) problem: &'a Problem,
+    pub(crate) lo: usize,
+    pub(crate) hi: usize,
+    pub(crate) tracks: Vec<TrackState>,
+    /// Track index holding each measurement of the problem, or FREE / OUTSIDE.
+    pub(crate) owner: Vec<u32>,
+    /// Position of each held measurement inside its track.
+    pub(crate) slot: Vec<u32>,
+    /// Σ_t n_t log λ_f over the window: the log posterior of "everything is clutter".
+    baseline: f64,
+}
+
+impl<'a> Partition<'a> {
+    /// The partition of the scans `window` (indices into `problem`) with every measurement a
+    /// false alarm.
+    pub fn empty(
+        model: &'a Model,
+        problem: &'a Problem,
+        window: RangeInclusive<usize>,
+    ) -> Result<Self> {
+        let (lo, hi) = (*window.start(), *window.end());
+        if lo > hi || hi >= problem.n_scans() {
+            return Err(Error::Invalid(format!(
+                "window {lo}..={hi} does not fit the problem's {} scans",
+                problem.n_scans()
+            )));
+        }
+        let mut owner = vec![OUTSIDE; problem.n_measurements()];
+        let mut n_in = 0usize;
+        for s in lo..=hi {
+            for &m in problem.scan(s) {
+                owner[m as usize] = FREE;
+                n_in += 1;
+            }
+        }
+        Ok(Self {
+            model,
+            problem,
+            lo,
+            hi,
+            tracks: Vec::new(),
+            slot: vec![0; problem.n_measurements()],
+            owner,
+            baseline: n_in as f64 * model.log_clutter_density,
+        })
+    }
+
+    /// The partition of `window` with the given tracks (each a list of measurement ids); every
+    /// constraint of Ω is checked: measurements inside the window and in at most one track,
+    /// at least two per track, one per scan, gaps of at most d̄ scans and consecutive
+    /// measurements within the neighbourhood radius.
+    pub fn from_tracks(
+        model: &'a Model,
+        problem: &'a Problem,
+        window: RangeInclusive<usize>,
+        tracks: &[Vec<MeasId>],
+    ) -> Result<Self> {
+        let mut partition = Self::empty(model, problem, window)?;
+        for (k, track) in tracks.iter().enumerate() {
+            partition.check_track(track).map_err(|reason| {
+                Error::Invalid(format!("track {k} ({track:?}) is not feasible: {reason}"))
+            })?;
+            partition.insert(track.clone(), None);
+        }
+        Ok(partition)
+    }
+
+    /// Why `track` cannot be added to this partition, if it cannot.
+    fn check_track(&self, track: &[MeasId]) -> std::result::Result<(), String> {
+        if track.len() < 2 {
+            return Err("fewer than 2 measurements".into());
+        }
+        for &m in track {
+            match self.owner.get(m as usize) {
+                None => return Err(format!("measurement {m} does not exist")),
+                Some(&OUTSIDE) => return Err(format!("measurement {m} is outside the window")),
+                Some(&FREE) => {}
+                Some(_) => return Err(format!("measurement {m} is already in a track")),
+            }
+        }
+        for pair in track.windows(2) {
+            let (a, b) = (pair[0], pair[1]);
+            let (ta, tb) = (self.problem.scan_of(a), self.problem.scan_of(b));
+            if tb <= ta {
+                return Err(format!(
+                    "measurements {a} and {b} are not in increasing scans"
+                ));
+            }
+            let d = tb - ta;
+            if d > self.problem.max_gap() {
+                return Err(format!("gap of {d} scans between {a} and {b} exceeds d̄"));
+            }
+            if !self.problem.within(a, b, d) {
+                return Err(format!("{a} and {b} are too far apart for {d} scans"));
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of tracks K.
+    pub fn n_tracks(&self) -> usize {
+        self.tracks.len()
+    }
+
+    /// Number of scans in the window.
+    pub fn n_scans(&self) -> usize {
+        self.hi - self.lo + 1
+    }
+
+    /// The window's scan indices.
+    pub fn window(&self) -> RangeInclusive<usize> {
+        self.lo..=self.hi
+    }
+
+    /// The tracks' measurement lists, in the partition's current order.
+    pub fn tracks(&self) -> impl Iterator<Item = &[MeasId]> {
+        self.tracks.iter().map(|t| t.meas.as_slice())
+    }
+
+    /// The partition in a canonical form (tracks sorted by their first measurement's id), for
+    /// comparing partitions.
+    pub fn canonical(&self) -> Vec<Vec<MeasId>> {
+        let mut out: Vec<Vec<MeasId>> = self.tracks().map(<[MeasId]>::to_vec).collect();
+        out.sort_unstable();
+        out
+    }
+
+    /// The track holding measurement `m`, if any.
+    pub fn track_of(&self, m: MeasId) -> Option<usize> {
+        match self.owner.get(m as usize) {
+            Some(&k) if k != FREE && k != OUTSIDE => Some(k as usize),
+            _ => None,
+        }
+    }
+
+    /// log P(ω | Y) up to a constant that depends on Y only (TAC 2009 eq. 9).
+    pub fn log_posterior(&self) -> f64 {
+        self.baseline + self.tracks.iter().map(|t| t.weight).sum::<f64>()
+    }
+
+    /// Whether `m` is a false alarm in the window.
+    #[inline]
+    pub(crate) fn is_free(&self, m: MeasId) -> bool {
+        self.owner[m as usize] == FREE
+    }
+
+    /// Adds a track (assumed feasible), filtering it from the first `keep` nodes of `prefix`.
+    pub(crate) fn insert(&mut self, meas: Vec<MeasId>, prefix: Option<(&[Node], usize)>) {
+        let mut nodes = Vec::with_capacity(meas.len());
+        let keep = match prefix {
+            Some((old, keep)) => {
+                let keep = keep.min(old.len());
+                nodes.extend_from_slice(&old[..keep]);
+                keep
+            }
+            None => 0,
+        };
+        self.model
+            .filter_track(self.problem, &meas, &mut nodes, keep);
+        let ll = nodes.last().map_or(0.0, Node::cum_log_likelihood);
+        let weight = self.model.track_weight(self.problem, &meas, ll, self.hi);
+        self.reinsert(TrackState {
+            meas,
+            nodes,
+            weight,
+        });
+    }
+
+    /// Adds back a track removed earlier, with its cached nodes.
+    pub(crate) fn reinsert(&mut self, track: TrackState) {
+        let k = self.tracks.len() as u32;
+        for (i, &m) in track.meas.iter().enumerate() {
+            self.owner[m as usize] = k;
+            self.slot[m as usize] = i as u32;
+        }
+        self.tracks.push(track);
+    }
+
+    /// Removes track `k`; its measurements become false alarms. The last track takes index k.
+    pub(crate) fn remove(&mut self, k: usize) -> TrackState {
+        let removed = self.tracks.swap_remove(k);
+        for &m in &removed.meas {
+            self.owner[m as usize] = FREE;
+        }
+        if let Some(moved) = self.tracks.get(k) {
+            for &m in &moved.meas {
+                self.owner[m as usize] = k as u32;
+            }
+        }
+        removed
+    }
+
+    /// The measurements a track may hold after `m`: L(y_m, t_m, d) restricted to the window.
+    #[inline]
+    pub(crate) fn successors(&self, m: MeasId, d: usize) -> &[MeasId] {
+        if self.problem.scan_of(m) + d > self.hi {
+            &[]
+        } else {
+            self.problem.forward(m, d)
+        }
+    }
+
+    /// Checks every invariant of the partition and its caches (for tests and debugging):
+    /// Ω's constraints, the owner and slot maps, and each cached weight against a fresh
+    /// filter.
+    pub fn check_invariants(&self) -> Result<()> {
+        let mut fresh = Self::empty(self.model, self.problem, self.window())?;
+        for (k, t) in self.tracks.iter().enumerate() {
+            fresh
+                .check_track(&t.meas)
+                .map_err(|r| Error::Invalid(format!("track {k} infeasible: {r}")))?;
+            fresh.insert(t.meas.clone(), None);
+            let w = fresh.tracks[k].weight;
+            if (w - t.weight).abs() > 1e-9 * w.abs().max(1.0) {
+                return Err(Error::Invalid(format!(
+                    "track {k}: cached weight {} but fresh {w}",
+                    t.weight
+                )));
+            }
+            for (i, &m) in t.meas.iter().enumerate() {
+                if self.owner[m as usize] != k as u32 || self.slot[m as usize] != i as u32 {
+                    return Err(Error::Invalid(format!("owner/slot map wrong for {m}")));
+                }
+            }
+        }
+        if fresh.owner != self.owner {
+            return Err(Error::Invalid("owner map has stale entries".into()));
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,264 @@
+//! The proposal distribution of multi-scan MCMCDA (TAC 2009 §IV-B): how tracks grow, and the
+//! exact probability q(ω → ω') of every move, evaluated from the partition alone.
+//!
+//! Probabilities are evaluated by functions separate from the sampling code, so the two can
+//! be checked against each other (the exactness test compares the chain with the enumerated
+//! posterior, which only holds if they agree). Where two move types can produce the same ω'
+//! (an update that regrows the old tail and then some is also an extension), q sums over
+//! every way, as the Metropolis-Hastings ratio requires.
+
+use rand::{Rng, RngExt};
+
+use crate::config::Move;
+use crate::partition::{FREE, OUTSIDE, Partition};
+use crate::problem::MeasId;
+
+/// log Σ exp(x_i), ignoring −∞ terms.
+fn log_sum_exp(terms: &[f64]) -> f64 {
+    let max = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if max == f64::NEG_INFINITY {
+        return max;
+    }
+    max + terms.iter().map(|t| (t - max).exp()).sum::<f64>().ln()
+}
+
+impl Partition<'_> {
+    /// Draws d ~ ζ.
+    pub(crate) fn sample_gap<R: Rng + ?Sized>(&self, rng: &mut R) -> usize {
+        let u: f64 = rng.random();
+        let cdf = &self.model.zeta_cdf;
+        cdf.iter().position(|c| u < *c).unwrap_or(cdf.len() - 1) + 1
+    }
+
+    /// |L(y_m, t_m, d) ∩ Free| within the window.
+    pub(crate) fn free_successor_count(&self, m: MeasId, d: usize) -> usize {
+        self.successors(m, d)
+            .iter()
+            .filter(|&&n| self.is_free(n))
+            .count()
+    }
+
+    fn has_free_successor(&self, m: MeasId, d: usize) -> bool {
+        self.successors(m, d).iter().any(|&n| self.is_free(n))
+    }
+
+    /// log of the probability that growth stops at `m`: γ, or "go on" and then find the drawn
+    /// gap's candidate set empty, γ + (1 − γ) Σ_{d: C(d) = ∅} ζ(d).
+    fn log_stop_at(&self, m: MeasId) -> f64 {
+        let empty_mass: f64 = (1..=self.problem.max_gap())
+            .filter(|&d| !self.has_free_successor(m, d))
+            .map(|d| self.model.zeta[d - 1])
+            .sum();
+        let gamma = self.model.config.stop_probability;
+        (gamma + (1.0 - gamma) * empty_mass).ln()
+    }
+
+    /// Grows a track from `start`, appending to `out`: repeat { stop with probability γ
+    /// (unless this is a mandatory step); draw d ~ ζ; C = L(y, t, d) ∩ Free; stop if C is
+    /// empty; append a uniform member of C }. Returns false if a mandatory step found C
+    /// empty (the move is rejected).
+    pub(crate) fn grow<R: Rng + ?Sized>(
+        &self,
+        start: MeasId,
+        mut mandatory: bool,
+        out: &mut Vec<MeasId>,
+        candidates: &mut Vec<MeasId>,
+        rng: &mut R,
+    ) -> bool {
+        let gamma = self.model.config.stop_probability;
+        let mut y = start;
+        loop {
+            if !mandatory && rng.random_bool(gamma) {
+                return true;
+            }
+            let d = self.sample_gap(rng);
+            candidates.clear();
+            candidates.extend(
+                self.successors(y, d)
+                    .iter()
+                    .copied()
+                    .filter(|&n| self.is_free(n)),
+            );
+            if candidates.is_empty() {
+                return !mandatory;
+            }
+            y = candidates[rng.random_range(0..candidates.len())];
+            out.push(y);
+            mandatory = false;
+        }
+    }
+
+    /// log P(growing from `start` yields exactly `tail`), in this partition (whose free set
+    /// must be the one growth ran with).
+    pub(crate) fn log_grow_probability(
+        &self,
+        start: MeasId,
+        tail: &[MeasId],
+        mandatory_first: bool,
+    ) -> f64 {
+        if tail.is_empty() && mandatory_first {
+            return f64::NEG_INFINITY;
+        }
+        let mut lp = 0.0;
+        let mut y = start;
+        for (i, &next) in tail.iter().enumerate() {
+            if i > 0 || !mandatory_first {
+                lp += self.model.log_go_on;
+            }
+            let (t, t_next) = (self.problem.scan_of(y), self.problem.scan_of(next));
+            if t_next <= t || t_next - t > self.problem.max_gap() || !self.is_free(next) {
+                return f64::NEG_INFINITY;
+            }
+            let d = t_next - t;
+            if !self.problem.within(y, next, d) {
+                return f64::NEG_INFINITY;
+            }
+            lp += self.model.log_zeta[d - 1] - (self.free_successor_count(y, d) as f64).ln();
+            y = next;
+        }
+        lp + self.log_stop_at(y)
+    }
+
+    /// The birth set L^B(t, d): free measurements of scan t with a non-empty L(y, t, d).
+    pub(crate) fn birth_set_count(&self, t: usize, d: usize) -> usize {
+        self.problem
+            .scan(t)
+            .iter()
+            .filter(|&&m| self.is_free(m) && !self.successors(m, d).is_empty())
+            .count()
+    }
+
+    /// log q of proposing `track` by a birth from this partition (which must not hold it):
+    /// ξ_K(birth) · 1/(T − 1) · ζ(d₁) / |L^B(t₁, d₁)| · 1/|C₂| · P(grow the rest).
+    pub(crate) fn log_birth_probability(&self, track: &[MeasId]) -> f64 {
+        let (t1, t2) = (
+            self.problem.scan_of(track[0]),
+            self.problem.scan_of(track[1]),
+        );
+        let d1 = t2 - t1;
+        let n_births = self.birth_set_count(t1, d1);
+        let n_second = self.free_successor_count(track[0], d1);
+        if n_births == 0 || n_second == 0 {
+            return f64::NEG_INFINITY;
+        }
+        self.model
+            .move_probability(Move::Birth, self.n_tracks())
+            .ln()
+            - ((self.n_scans() - 1) as f64).ln()
+            + self.model.log_zeta[d1 - 1]
+            - (n_births as f64).ln()
+            - (n_second as f64).ln()
+            + self.log_grow_probability(track[1], &track[2..], false)
+    }
+
+    /// |S(ω)|: the split points (k, i) with |τ_k| ≥ 4 and both parts keeping ≥ 2.
+    pub(crate) fn split_count(&self) -> usize {
+        self.tracks
+            .iter()
+            .map(|t| t.meas.len().saturating_sub(3))
+            .sum()
+    }
+
+    /// Calls `f(k2)` for each track k2 ≠ k1 whose first measurement can follow k1's last.
+    pub(crate) fn for_each_merge_partner(&self, k1: usize, mut f: impl FnMut(usize)) {
+        let Some(&last) = self.tracks[k1].meas.last() else {
+            return;
+        };
+        for d in 1..=self.problem.max_gap() {
+            for &m in self.successors(last, d) {
+                let k2 = self.owner[m as usize];
+                if k2 != FREE && k2 != OUTSIDE && k2 as usize != k1 && self.slot[m as usize] == 0 {
+                    f(k2 as usize);
+                }
+            }
+        }
+    }
+
+    pub(crate) fn merge_partner_count(&self, k1: usize) -> usize {
+        let mut n = 0;
+        self.for_each_merge_partner(k1, |_| n += 1);
+        n
+    }
+
+    /// Calls `f(k2, q)` for each switch partner of (τ_k1, position p): positions q of other
+    /// tracks with τ_k1(p+1) ∈ L(τ_k2(q), ·) and τ_k2(q+1) ∈ L(τ_k1(p), ·), gaps in 1..=d̄.
+    pub(crate) fn for_each_switch_partner(
+        &self,
+        k1: usize,
+        p: usize,
+        mut f: impl FnMut(usize, usize),
+    ) {
+        let track = &self.tracks[k1].meas;
+        let (y_p, s1) = (track[p], track[p + 1]);
+        let t_p = self.problem.scan_of(y_p);
+        let t_s1 = self.problem.scan_of(s1);
+        let d_bar = self.problem.max_gap();
+        for d in 1..=d_bar.min(t_s1) {
+            for &y in self.problem.backward(s1, d) {
+                let k2 = self.owner[y as usize];
+                if k2 == FREE || k2 == OUTSIDE || k2 as usize == k1 {
+                    continue;
+                }
+                let other = &self.tracks[k2 as usize].meas;
+                let q = self.slot[y as usize] as usize;
+                let Some(&s2) = other.get(q + 1) else {
+                    continue;
+                };
+                let t_s2 = self.problem.scan_of(s2);
+                if t_s2 > t_p && t_s2 - t_p <= d_bar && self.problem.within(y_p, s2, t_s2 - t_p) {
+                    f(k2 as usize, q);
+                }
+            }
+        }
+    }
+
+    pub(crate) fn switch_partner_count(&self, k1: usize, p: usize) -> usize {
+        let mut n = 0;
+        self.for_each_switch_partner(k1, p, |_, _| n += 1);
+        n
+    }
+
+    /// log q of a switch of (τ_a, p) with (τ_b, q) in this partition: the pair can be drawn
+    /// from either end (track, position, then partner).
+    pub(crate) fn log_switch_probability(&self, a: usize, p: usize, b: usize, q: usize) -> f64 {
+        let k = self.n_tracks() as f64;
+        let end = |t: usize, pos: usize| {
+            let n = self.switch_partner_count(t, pos) as f64;
+            1.0 / ((self.tracks[t].meas.len() - 1) as f64 * n)
+        };
+        self.model
+            .move_probability(Move::Switch, self.n_tracks())
+            .ln()
+            - k.ln()
+            + (end(a, p) + end(b, q)).ln()
+    }
+
+    /// log q(τ → τ') for the moves that change one track and keep K (extension, reduction,
+    /// update), summed over every way of producing τ'. Evaluated in the partition *without*
+    /// the track (its measurements free): growth after position r only looks at later scans,
+    /// where that free set is exactly the one each move grew with. `k` is K in ω.
+    pub(crate) fn log_single_track_probability(
+        &self,
+        k: usize,
+        from: &[MeasId],
+        to: &[MeasId],
+    ) -> f64 {
+        let xi = |m| self.model.move_probability(m, k);
+        let common = from.iter().zip(to).take_while(|(a, b)| a == b).count();
+        let mut terms: Vec<f64> = Vec::with_capacity(common + 2);
+        if to.len() > from.len() && common == from.len() {
+            terms.push(
+                xi(Move::Extension).ln()
+                    + self.log_grow_probability(from[common - 1], &to[common..], false),
+            );
+        }
+        if from.len() >= 3 && to.len() >= 2 && to.len() < from.len() && common == to.len() {
+            terms.push(xi(Move::Reduction).ln() - ((from.len() - 2) as f64).ln());
+        }
+        let log_update = xi(Move::Update).ln() - (from.len() as f64).ln();
+        for r in 1..=common.min(from.len()) {
+            terms.push(log_update + self.log_grow_probability(to[r - 1], &to[r..], r == 1));
+        }
+        log_sum_exp(&terms) - (k as f64).ln()
+    }
+}

@@ -1,0 +1,493 @@
+//! Multi-scan MCMCDA (TAC 2009 Algorithm 3): a Metropolis-Hastings chain over partitions with
+//! the eight moves, the MAP estimate (best sample seen), an optional running MMSE functional,
+//! and independent chains in parallel.
+
+use rand::{Rng, RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::config::Move;
+use crate::error::Result;
+use crate::partition::{Partition, TrackState};
+use crate::problem::MeasId;
+
+/// How often each move was proposed and accepted.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct MoveStats {
+    /// Proposals per move, in [`Move::ALL`] order.
+    pub proposed: [u64; 8],
+    /// Accepted proposals per move (a proposal that leaves ω unchanged counts as accepted).
+    pub accepted: [u64; 8],
+}
+
+impl MoveStats {
+    /// Total proposals.
+    pub fn total_proposed(&self) -> u64 {
+        self.proposed.iter().sum()
+    }
+
+    /// Overall acceptance rate.
+    pub fn acceptance_rate(&self) -> f64 {
+        self.accepted.iter().sum::<u64>() as f64 / self.total_proposed().max(1) as f64
+    }
+
+    fn merge(&mut self, other: &Self) {
+        for i in 0..8 {
+            self.proposed[i] += other.proposed[i];
+            self.accepted[i] += other.accepted[i];
+        }
+    }
+}
+
+/// The outcome of a proposal.
+enum Outcome {
+    Accepted,
+    Rejected,
+}
+
+/// One Markov chain: its current partition, generator, MAP and statistics.
+pub struct Chain<'a, R> {
+    state: Partition<'a>,
+    rng: R,
+    log_posterior: f64,
+    best: Vec<Vec<MeasId>>,
+    best_log_posterior: f64,
+    stats: MoveStats,
+    candidates: Vec<MeasId>,
+    grown: Vec<MeasId>,
+    /// Tests force acceptance to check that every move's reverse restores ω.
+    #[cfg(test)]
+    pub(crate) force_accept: bool,
+}
+
+impl<'a, R: Rng> Chain<'a, R> {
+    /// A chain starting from `initial` (e.g. the greedy nearest-neighbour partition, or
+    /// [`Partition::empty`]).
+    pub fn new(initial: Partition<'a>, rng: R) -> Self {
+        let log_posterior = initial.log_posterior();
+        Self {
+            best: initial.canonical(),
+            best_log_posterior: log_posterior,
+            state: initial,
+            rng,
+            log_posterior,
+            stats: MoveStats::default(),
+            candidates: Vec::new(),
+            grown: Vec::new(),
+            #[cfg(test)]
+            force_accept: false,
+        }
+    }
+
+    /// The current partition.
+    pub fn state(&self) -> &Partition<'a> {
+        &self.state
+    }
+
+    /// The best partition seen (canonical form) and its log posterior.
+    pub fn map(&self) -> (&[Vec<MeasId>], f64) {
+        (&self.best, self.best_log_posterior)
+    }
+
+    /// Proposal statistics so far.
+    pub fn stats(&self) -> &MoveStats {
+        &self.stats
+    }
+
+    /// Runs `n` steps of Algorithm 3.
+    pub fn run(&mut self, n: u64) {
+        for _ in 0..n {
+            self.step();
+        }
+    }
+
+    /// Runs `n` steps and returns the running mean of `f` over the n samples (the MMSE
+    /// estimate of eq. 11 for any functional of ω with a fixed length).
+    pub fn run_mmse(&mut self, n: u64, mut f: impl FnMut(&Partition<'a>) -> Vec<f64>) -> Vec<f64> {
+        let mut mean: Vec<f64> = Vec::new();
+        for i in 1..=n {
+            self.step();
+            let value = f(&self.state);
+            if mean.is_empty() {
+                mean = vec![0.0; value.len()];
+            }
+            let w = 1.0 / i as f64;
+            for (m, v) in mean.iter_mut().zip(value) {
+                *m += w * (v - *m);
+            }
+        }
+        mean
+    }
+
+    /// One Metropolis-Hastings step; returns the move proposed and whether it was accepted.
+    pub fn step(&mut self) -> (Move, bool) {
+        let k = self.state.n_tracks();
+        let m = self.draw_move(k);
+        (m, self.step_with(m))
+    }
+
+    /// One step with the move type fixed (if `m` is not allowed with K tracks, nothing
+    /// happens); returns whether the proposal was accepted.
+    pub(crate) fn step_with(&mut self, m: Move) -> bool {
+        if !m.allowed_with(self.state.n_tracks()) {
+            return false;
+        }
+        let outcome = match m {
+            Move::Birth => self.birth(),
+            Move::Death => self.death(),
+            Move::Split => self.split(),
+            Move::Merge => self.merge(),
+            Move::Extension | Move::Reduction | Move::Update => self.single_track(m),
+            Move::Switch => self.switch(),
+        };
+        self.stats.proposed[m.index()] += 1;
+        let accepted = matches!(outcome, Outcome::Accepted);
+        if accepted {
+            self.stats.accepted[m.index()] += 1;
+            if self.log_posterior > self.best_log_posterior {
+                self.best_log_posterior = self.log_posterior;
+                self.best = self.state.canonical();
+            }
+        }
+        accepted
+    }
+
+    fn draw_move(&mut self, k: usize) -> Move {
+        let u: f64 = self.rng.random();
+        let mut acc = 0.0;
+        for m in Move::ALL {
+            acc += self.state.model.move_probability(m, k);
+            if u < acc {
+                return m;
+            }
+        }
+        Move::Birth
+    }
+
+    /// Metropolis-Hastings acceptance of a change of the log posterior by `delta`.
+    fn accept(&mut self, delta: f64, log_q_forward: f64, log_q_reverse: f64) -> bool {
+        let log_ratio = delta + log_q_reverse - log_q_forward;
+        #[cfg(test)]
+        if self.force_accept {
+            self.log_posterior += delta;
+            return true;
+        }
+        if log_ratio.is_nan() {
+            return false;
+        }
+        if log_ratio >= 0.0 || self.rng.random::<f64>().ln() < log_ratio {
+            self.log_posterior += delta;
+            true
+        } else {
+            false
+        }
+    }
+
+    fn birth(&mut self) -> Outcome {
+        let s = &self.state;
+        let n_scans = s.n_scans();
+        if n_scans < 2 {
+            return Outcome::Rejected;
+        }
+        let t1 = s.lo + self.rng.random_range(0..n_scans - 1);
+        let d1 = s.sample_gap(&mut self.rng);
+        let n_births = s.birth_set_count(t1, d1);
+        if n_births == 0 {
+            return Outcome::Rejected;
+        }
+        let pick = self.rng.random_range(0..n_births);
+        let Some(&y1) = s
+            .problem
+            .scan(t1)
+            .iter()
+            .filter(|&&m| s.is_free(m) && !s.successors(m, d1).is_empty())
+            .nth(pick)
+        else {
+            return Outcome::Rejected;
+        };
+        self.candidates.clear();
+        self.candidates.extend(
+            s.successors(y1, d1)
+                .iter()
+                .copied()
+                .filter(|&n| s.is_free(n)),
+        );
+        if self.candidates.is_empty() {
+            return Outcome::Rejected;
+        }
+        let y2 = self.candidates[self.rng.random_range(0..self.candidates.len())];
+        let mut track = vec![y1, y2];
+        s.grow(y2, false, &mut track, &mut self.candidates, &mut self.rng);
+        let log_q_forward = s.log_birth_probability(&track);
+        let k_new = s.n_tracks() + 1;
+        let log_q_reverse = s.model.move_probability(Move::Death, k_new).ln() - (k_new as f64).ln();
+        self.state.insert(track, None);
+        let delta = self.state.tracks[k_new - 1].weight;
+        if self.accept(delta, log_q_forward, log_q_reverse) {
+            Outcome::Accepted
+        } else {
+            self.state.remove(k_new - 1);
+            Outcome::Rejected
+        }
+    }
+
+    fn death(&mut self) -> Outcome {
+        let k = self.state.n_tracks();
+        let victim = self.rng.random_range(0..k);
+        let log_q_forward =
+            self.state.model.move_probability(Move::Death, k).ln() - (k as f64).ln();
+        let old = self.state.remove(victim);
+        let log_q_reverse = self.state.log_birth_probability(&old.meas);
+        if self.accept(-old.weight, log_q_forward, log_q_reverse) {
+            Outcome::Accepted
+        } else {
+            self.state.reinsert(old);
+            Outcome::Rejected
+        }
+    }
+
+    fn split(&mut self) -> Outcome {
+        let s = &self.state;
+        let k = s.n_tracks();
+        let n_split = s.split_count();
+        if n_split == 0 {
+            return Outcome::Rejected;
+        }
+        let mut pick = self.rng.random_range(0..n_split);
+        let Some((victim, cut)) = s.tracks.iter().enumerate().find_map(|(i, t)| {
+            let n = t.meas.len().saturating_sub(3);
+            if pick < n {
+                Some((i, pick + 2))
+            } else {
+                pick -= n;
+                None
+            }
+        }) else {
+            return Outcome::Rejected;
+        };
+        let log_q_forward = s.model.move_probability(Move::Split, k).ln() - (n_split as f64).ln();
+        let old = self.state.remove(victim);
+        let head = old.meas[..cut].to_vec();
+        let tail = old.meas[cut..].to_vec();
+        self.state.insert(head, Some((&old.nodes, cut)));
+        self.state.insert(tail, None);
+        let s = &self.state;
+        let head_index = k - 1;
+        let log_q_reverse = s.model.move_probability(Move::Merge, k + 1).ln()
+            - ((k + 1) as f64).ln()
+            - (s.merge_partner_count(head_index) as f64).ln();
+        let delta = s.tracks[k - 1].weight + s.tracks[k].weight - old.weight;
+        self.finish_replacing(delta, log_q_forward, log_q_reverse, 2, vec![old])
+    }
+
+    fn merge(&mut self) -> Outcome {
+        let s = &self.state;
+        let k = s.n_tracks();
+        let first = self.rng.random_range(0..k);
+        let n_partners = s.merge_partner_count(first);
+        if n_partners == 0 {
+            return Outcome::Rejected;
+        }
+        let pick = self.rng.random_range(0..n_partners);
+        let mut second = usize::MAX;
+        let mut i = 0;
+        s.for_each_merge_partner(first, |k2| {
+            if i == pick {
+                second = k2;
+            }
+            i += 1;
+        });
+        let log_q_forward = s.model.move_probability(Move::Merge, k).ln()
+            - (k as f64).ln()
+            - (n_partners as f64).ln();
+        let (a, b) = self.remove_pair(first, second);
+        let mut joined = a.meas.clone();
+        joined.extend_from_slice(&b.meas);
+        let keep = a.meas.len();
+        self.state.insert(joined, Some((&a.nodes, keep)));
+        let s = &self.state;
+        let log_q_reverse =
+            s.model.move_probability(Move::Split, k - 1).ln() - (s.split_count() as f64).ln();
+        let delta = s.tracks[k - 2].weight - a.weight - b.weight;
+        self.finish_replacing(delta, log_q_forward, log_q_reverse, 1, vec![a, b])
+    }
+
+    /// Extension, reduction or update of one track (all keep K; q sums over the three).
+    fn single_track(&mut self, m: Move) -> Outcome {
+        let k = self.state.n_tracks();
+        let victim = self.rng.random_range(0..k);
+        let old = self.state.remove(victim);
+        let len = old.meas.len();
+        self.grown.clear();
+        let proposed = match m {
+            Move::Extension => {
+                self.grown.extend_from_slice(&old.meas);
+                self.state.grow(
+                    old.meas[len - 1],
+                    false,
+                    &mut self.grown,
+                    &mut self.candidates,
+                    &mut self.rng,
+                );
+                true
+            }
+            Move::Reduction if len >= 3 => {
+                let r = self.rng.random_range(2..len);
+                self.grown.extend_from_slice(&old.meas[..r]);
+                true
+            }
+            Move::Update => {
+                let r = self.rng.random_range(1..=len);
+                self.grown.extend_from_slice(&old.meas[..r]);
+                self.state.grow(
+                    old.meas[r - 1],
+                    r == 1,
+                    &mut self.grown,
+                    &mut self.candidates,
+                    &mut self.rng,
+                )
+            }
+            _ => false,
+        };
+        if !proposed {
+            self.state.reinsert(old);
+            return Outcome::Rejected;
+        }
+        if self.grown == old.meas {
+            self.state.reinsert(old);
+            return Outcome::Accepted;
+        }
+        let new = std::mem::take(&mut self.grown);
+        let log_q_forward = self.state.log_single_track_probability(k, &old.meas, &new);
+        let log_q_reverse = self.state.log_single_track_probability(k, &new, &old.meas);
+        let keep = old
+            .meas
+            .iter()
+            .zip(&new)
+            .take_while(|(a, b)| a == b)
+            .count();
+        self.state.insert(new, Some((&old.nodes, keep)));
+        let delta = self.state.tracks[k - 1].weight - old.weight;
+        self.finish_replacing(delta, log_q_forward, log_q_reverse, 1, vec![old])
+    }
+
+    fn switch(&mut self) -> Outcome {
+        let s = &self.state;
+        let k = s.n_tracks();
+        let a = self.rng.random_range(0..k);
+        let p = self.rng.random_range(0..s.tracks[a].meas.len() - 1);
+        let n_partners = s.switch_partner_count(a, p);
+        if n_partners == 0 {
+            return Outcome::Rejected;
+        }
+        let pick = self.rng.random_range(0..n_partners);
+        let (mut b, mut q) = (usize::MAX, 0);
+        let mut i = 0;
+        s.for_each_switch_partner(a, p, |k2, pos| {
+            if i == pick {
+                (b, q) = (k2, pos);
+            }
+            i += 1;
+        });
+        let log_q_forward = s.log_switch_probability(a, p, b, q);
+        let (ta, tb) = self.remove_pair(a, b);
+        let mut new_a = ta.meas[..=p].to_vec();
+        new_a.extend_from_slice(&tb.meas[q + 1..]);
+        let mut new_b = tb.meas[..=q].to_vec();
+        new_b.extend_from_slice(&ta.meas[p + 1..]);
+        self.state.insert(new_a, Some((&ta.nodes, p + 1)));
+        self.state.insert(new_b, Some((&tb.nodes, q + 1)));
+        let s = &self.state;
+        let log_q_reverse = s.log_switch_probability(k - 2, p, k - 1, q);
+        let delta = s.tracks[k - 2].weight + s.tracks[k - 1].weight - ta.weight - tb.weight;
+        self.finish_replacing(delta, log_q_forward, log_q_reverse, 2, vec![ta, tb])
+    }
+
+    /// Removes tracks `i` and `j` (i ≠ j), returned in that order.
+    fn remove_pair(&mut self, i: usize, j: usize) -> (TrackState, TrackState) {
+        // Remove the higher index first so the lower one does not move.
+        if i > j {
+            let a = self.state.remove(i);
+            let b = self.state.remove(j);
+            (a, b)
+        } else {
+            let b = self.state.remove(j);
+            let a = self.state.remove(i);
+            (a, b)
+        }
+    }
+
+    /// Accepts, or undoes the move: removes the `n_new` tracks just inserted (the last ones)
+    /// and puts `old` back.
+    fn finish_replacing(
+        &mut self,
+        delta: f64,
+        log_q_forward: f64,
+        log_q_reverse: f64,
+        n_new: usize,
+        old: Vec<TrackState>,
+    ) -> Outcome {
+        if self.accept(delta, log_q_forward, log_q_reverse) {
+            return Outcome::Accepted;
+        }
+        for _ in 0..n_new {
+            let last = self.state.n_tracks() - 1;
+            self.state.remove(last);
+        }
+        for t in old {
+            self.state.reinsert(t);
+        }
+        Outcome::Rejected
+    }
+}
+
+/// The result of a multi-scan MCMCDA run.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct McmcdaRun {
+    /// The MAP partition (canonical form: tracks of measurement ids).
+    pub tracks: Vec<Vec<MeasId>>,
+    /// Its log posterior (up to a constant of Y).
+    pub log_posterior: f64,
+    /// Which chain found it.
+    pub chain: usize,
+    /// Proposal statistics summed over chains.
+    pub stats: MoveStats,
+}
+
+/// Runs `n_chains` independent chains of `n_samples` steps each from `initial`, in parallel;
+/// chain i draws from ChaCha8(seed) stream i, so the result does not depend on the thread
+/// count. The MAP is the best over all chains (ties go to the lowest chain index).
+pub fn run_chains(
+    initial: &Partition<'_>,
+    n_chains: usize,
+    n_samples: u64,
+    seed: u64,
+) -> Result<McmcdaRun> {
+    let results: Vec<(Vec<Vec<MeasId>>, f64, MoveStats)> = (0..n_chains.max(1))
+        .into_par_iter()
+        .map(|i| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            rng.set_stream(i as u64);
+            let mut chain = Chain::new(initial.clone(), rng);
+            chain.run(n_samples);
+            let (best, lp) = chain.map();
+            (best.to_vec(), lp, *chain.stats())
+        })
+        .collect();
+    let mut stats = MoveStats::default();
+    let mut best = 0;
+    for (i, r) in results.iter().enumerate() {
+        stats.merge(&r.2);
+        if r.1 > results[best].1 {
+            best = i;
+        }
+    }
+    let (tracks, log_posterior, _) = results.into_iter().nth(best).unwrap_or_default();
+    Ok(McmcdaRun {
+        tracks,
+        log_posterior,
+        chain: best,
+        stats,
+    })
+}

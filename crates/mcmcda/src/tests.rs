@@ -1,0 +1,328 @@
+//! Tests of the multi-scan sampler against independent routes: enumeration of every
+//! partition, the per-scan-count posterior with a general Kalman filter, and forced reverse
+//! moves.
+
+use std::collections::HashMap;
+
+use nalgebra::{Matrix2, Matrix4, Vector2};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use tracker_model::{ConstantVelocity2, Measurement, Origin, Scan, SimulationConfig};
+
+use crate::reference::{enumerate_partitions, log_posterior_by_counts};
+use crate::sampler::Chain;
+use crate::{McmcdaConfig, Model, Move, Partition, Problem, TrackInit, run_chains};
+
+fn scan(frame: u32, points: &[(f64, f64)]) -> Scan {
+    Scan {
+        frame,
+        measurements: points
+            .iter()
+            .map(|&(x, y)| Measurement {
+                value: Vector2::new(x, y),
+                origin: Origin::Unknown,
+            })
+            .collect(),
+    }
+}
+
+/// Three scans with two measurements each: two crossing targets, ambiguous enough that many
+/// partitions carry real posterior mass.
+fn tiny_config() -> McmcdaConfig {
+    McmcdaConfig {
+        volume: 400.0,
+        births_per_scan: 0.6,
+        clutter_per_scan: 0.8,
+        p_disappear: 0.1,
+        p_detect: 0.8,
+        motion: ConstantVelocity2::mcmcda(1.0, 1.0).unwrap(),
+        measurement_noise: Matrix2::identity() * 1.5,
+        max_gap: 2,
+        max_speed: 6.0,
+        ..McmcdaConfig::default()
+    }
+}
+
+fn tiny_scans() -> Vec<Scan> {
+    vec![
+        scan(0, &[(0.0, 0.0), (4.0, 1.0)]),
+        scan(1, &[(2.0, 1.0), (2.5, 0.0)]),
+        scan(2, &[(4.0, 1.5), (1.0, 3.0)]),
+    ]
+}
+
+fn exact_posterior(model: &Model, problem: &Problem) -> HashMap<Vec<Vec<u32>>, f64> {
+    let window = 0..=problem.n_scans() - 1;
+    let all = enumerate_partitions(model, problem, window.clone()).unwrap();
+    let lps: Vec<f64> = all
+        .iter()
+        .map(|p| log_posterior_by_counts(model, problem, window.clone(), p).unwrap())
+        .collect();
+    let max = lps.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let z: f64 = lps.iter().map(|l| (l - max).exp()).sum();
+    all.into_iter()
+        .zip(lps)
+        .map(|(p, l)| (p, (l - max).exp() / z))
+        .collect()
+}
+
+fn chain_frequencies(
+    model: &Model,
+    problem: &Problem,
+    n_chains: u64,
+    n_steps: u64,
+) -> HashMap<Vec<Vec<u32>>, f64> {
+    let mut counts: HashMap<Vec<Vec<u32>>, u64> = HashMap::new();
+    for c in 0..n_chains {
+        let start = Partition::empty(model, problem, 0..=problem.n_scans() - 1).unwrap();
+        let mut chain = Chain::new(start, ChaCha8Rng::seed_from_u64(100 + c));
+        for _ in 0..n_steps {
+            chain.step();
+            *counts.entry(chain.state().canonical()).or_default() += 1;
+        }
+    }
+    let total = (n_chains * n_steps) as f64;
+    counts
+        .into_iter()
+        .map(|(p, n)| (p, n as f64 / total))
+        .collect()
+}
+
+fn total_variation(
+    exact: &HashMap<Vec<Vec<u32>>, f64>,
+    empirical: &HashMap<Vec<Vec<u32>>, f64>,
+) -> f64 {
+    let mut tv = 0.0;
+    for (p, q) in exact {
+        tv += (q - empirical.get(p).copied().unwrap_or(0.0)).abs();
+    }
+    for (p, q) in empirical {
+        assert!(
+            exact.contains_key(p),
+            "chain visited an infeasible partition {p:?}"
+        );
+        tv += 0.0 * q;
+    }
+    tv / 2.0
+}
+
+#[test]
+fn chain_matches_the_enumerated_posterior() {
+    for init in [
+        TrackInit::FirstMeasurement {
+            velocity_variance: None,
+        },
+        TrackInit::TwoPoint {
+            initial_covariance: Matrix4::identity(),
+        },
+    ] {
+        let model = McmcdaConfig {
+            track_init: init,
+            ..tiny_config()
+        }
+        .check()
+        .unwrap();
+        let problem = Problem::from_scans(&model, &tiny_scans()).unwrap();
+        let exact = exact_posterior(&model, &problem);
+        let top = exact.values().copied().fold(0.0, f64::max);
+        // The test is only meaningful if mass is spread over several partitions.
+        assert!(
+            exact.len() > 30 && top < 0.5,
+            "{} partitions, top {top}",
+            exact.len()
+        );
+        let empirical = chain_frequencies(&model, &problem, 4, 250_000);
+        let tv = total_variation(&exact, &empirical);
+        eprintln!(
+            "{init:?}: {} partitions, top {top:.3}, TV {tv:.4}",
+            exact.len()
+        );
+        assert!(tv < 0.02, "{init:?}: total variation {tv}");
+    }
+}
+
+#[test]
+fn incremental_posterior_equals_recomputation_after_every_move() {
+    let sim = SimulationConfig {
+        births_per_scan: 1.0,
+        clutter_per_scan: 3.0,
+        n_scans: 12,
+        ..SimulationConfig::default()
+    }
+    .check()
+    .unwrap()
+    .simulate(&mut ChaCha8Rng::seed_from_u64(5))
+    .unwrap();
+    for init in [
+        TrackInit::FirstMeasurement {
+            velocity_variance: None,
+        },
+        TrackInit::TwoPoint {
+            initial_covariance: Matrix4::identity() * 50.0,
+        },
+    ] {
+        let model = McmcdaConfig {
+            clutter_per_scan: 3.0,
+            track_init: init,
+            ..McmcdaConfig::default()
+        }
+        .check()
+        .unwrap();
+        let problem = Problem::from_scans(&model, &sim.scans).unwrap();
+        let window = 0..=problem.n_scans() - 1;
+        let start = Partition::empty(&model, &problem, window.clone()).unwrap();
+        let mut chain = Chain::new(start, ChaCha8Rng::seed_from_u64(9));
+        let mut accepted = [0u32; 8];
+        for i in 0..20_000 {
+            // Every third proposal is forced through, so that rarely accepted moves (splits)
+            // and unlikely partitions are exercised too.
+            chain.force_accept = i % 3 == 0;
+            let (m, ok) = chain.step();
+            if ok {
+                accepted[m.index()] += 1;
+            }
+            let state = chain.state();
+            state.check_invariants().unwrap();
+            let tracks: Vec<Vec<u32>> = state.tracks().map(<[u32]>::to_vec).collect();
+            let fresh = log_posterior_by_counts(&model, &problem, window.clone(), &tracks).unwrap();
+            let incremental = state.log_posterior();
+            assert!(
+                (fresh - incremental).abs() < 1e-8 * fresh.abs().max(1.0),
+                "after {m:?}: {incremental} vs {fresh}"
+            );
+        }
+        assert!(
+            accepted.iter().all(|&a| a > 0),
+            "every move accepted some time: {accepted:?}"
+        );
+    }
+}
+
+/// The move that undoes `m`.
+fn reverse(m: Move) -> Move {
+    match m {
+        Move::Birth => Move::Death,
+        Move::Death => Move::Birth,
+        Move::Split => Move::Merge,
+        Move::Merge => Move::Split,
+        Move::Extension => Move::Reduction,
+        Move::Reduction => Move::Extension,
+        Move::Update => Move::Update,
+        Move::Switch => Move::Switch,
+    }
+}
+
+#[test]
+fn every_move_is_undone_by_its_reverse() {
+    // Slow targets and a small neighbourhood keep candidate sets small, so that a random
+    // reverse proposal regenerates the old partition often enough to find it.
+    let sim = SimulationConfig {
+        births_per_scan: 0.6,
+        clutter_per_scan: 1.0,
+        n_scans: 7,
+        initial_speed_max: 20.0,
+        max_speed: Some(30.0),
+        ..SimulationConfig::default()
+    }
+    .check()
+    .unwrap()
+    .simulate(&mut ChaCha8Rng::seed_from_u64(3))
+    .unwrap();
+    let model = McmcdaConfig {
+        max_speed: 40.0,
+        gap_distribution: crate::GapDistribution::Uniform,
+        ..McmcdaConfig::default()
+    }
+    .check()
+    .unwrap();
+    let problem = Problem::from_scans(&model, &sim.scans).unwrap();
+    let start = Partition::empty(&model, &problem, 0..=problem.n_scans() - 1).unwrap();
+    let mut chain = Chain::new(start, ChaCha8Rng::seed_from_u64(4));
+    chain.force_accept = true;
+    let mut undone = [0u32; 8];
+    let mut rng_seed = 1000;
+    for _ in 0..3000 {
+        let before = chain.state().canonical();
+        let (m, _) = chain.step();
+        let after = chain.state().canonical();
+        if after == before {
+            continue;
+        }
+        // Propose the reverse move from ω' until it produces ω (fresh generators each try).
+        let back = (0..20_000).any(|_| {
+            rng_seed += 1;
+            let mut probe = Chain::new(chain.state().clone(), ChaCha8Rng::seed_from_u64(rng_seed));
+            probe.force_accept = true;
+            probe.step_with(reverse(m));
+            probe.state().canonical() == before
+        });
+        assert!(
+            back,
+            "{m:?} from {before:?} to {after:?} could not be undone"
+        );
+        undone[m.index()] += 1;
+    }
+    assert!(
+        undone.iter().all(|&n| n > 0),
+        "every move type exercised: {undone:?}"
+    );
+}
+
+#[test]
+fn best_chain_does_not_depend_on_the_thread_count() {
+    let sim = SimulationConfig {
+        births_per_scan: 2.0,
+        ..SimulationConfig::default()
+    }
+    .check()
+    .unwrap()
+    .simulate(&mut ChaCha8Rng::seed_from_u64(11))
+    .unwrap();
+    let model = McmcdaConfig {
+        births_per_scan: 2.0,
+        ..McmcdaConfig::default()
+    }
+    .check()
+    .unwrap();
+    let problem = Problem::from_scans(&model, &sim.scans).unwrap();
+    let start = Partition::empty(&model, &problem, 0..=problem.n_scans() - 1).unwrap();
+    let run_in = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| run_chains(&start, 4, 5_000, 21).unwrap())
+    };
+    let one = run_in(1);
+    let two = run_in(2);
+    assert_eq!(one, two);
+    assert_eq!(one.log_posterior.to_bits(), two.log_posterior.to_bits());
+}
+
+#[test]
+fn infeasible_partitions_are_rejected_with_reasons() {
+    let model = tiny_config().check().unwrap();
+    let problem = Problem::from_scans(&model, &tiny_scans()).unwrap();
+    let err = |tracks: &[Vec<u32>]| {
+        Partition::from_tracks(&model, &problem, 0..=2, tracks)
+            .unwrap_err()
+            .to_string()
+    };
+    assert!(err(&[vec![0]]).contains("fewer than 2"));
+    assert!(err(&[vec![0, 1]]).contains("increasing scans"));
+    assert!(err(&[vec![0, 2], vec![2, 4]]).contains("already in a track"));
+    assert!(err(&[vec![0, 99]]).contains("does not exist"));
+    let far = McmcdaConfig {
+        max_speed: 1.0,
+        ..tiny_config()
+    }
+    .check()
+    .unwrap();
+    let problem_far = Problem::from_scans(&far, &tiny_scans()).unwrap();
+    assert!(
+        Partition::from_tracks(&far, &problem_far, 0..=2, &[vec![0, 3]])
+            .unwrap_err()
+            .to_string()
+            .contains("too far apart")
+    );
+}
