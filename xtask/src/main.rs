@@ -41,6 +41,9 @@ enum Command {
         /// Output directory (default: target/report in the workspace).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Only scenarios whose name contains this text.
+        #[arg(long)]
+        filter: Option<String>,
     },
     /// fmt, clippy, tests, docs, bench build and the scenario suite: what CI runs.
     Ci,
@@ -65,9 +68,10 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
         Command::Scenarios { bless, filter } => scenario::run_suite(filter.as_deref(), bless),
-        Command::Report { out } => {
-            report::run(&out.unwrap_or_else(|| workspace_root().join("target/report")))
-        }
+        Command::Report { out, filter } => report::run(
+            &out.unwrap_or_else(|| workspace_root().join("target/report")),
+            filter.as_deref(),
+        ),
         Command::Ci => ci::run(),
         Command::Eval {
             gt,

@@ -138,8 +138,8 @@ pub fn fmt_num(v: f64) -> String {
     clippy::print_stdout,
     reason = "the report's tables are printed on the terminal"
 )]
-pub fn run(out_dir: &Path) -> Outcome {
-    let scenarios = scenario::load_all(None)?;
+pub fn run(out_dir: &Path, filter: Option<&str>) -> Outcome {
+    let scenarios = scenario::load_all(filter)?;
     if scenarios.is_empty() {
         bail!("no scenarios in fixtures/scenarios");
     }

@@ -7,7 +7,7 @@
 //! * CLEAR MOT ([`clear_mot`]: MOTA, MOTP, MODA, IDSW, Frag, MT/PT/ML), identity metrics
 //!   ([`identity`]: IDF1, IDP, IDR) and [`hota`] (HOTA, DetA, AssA, LocA, DetRe, DetPr, AssRe,
 //!   AssPr), for boxes (IoU) or points (distance), all over one shared [`Sequence`];
-//! * [`ospa`] and [`gospa`] between point sets, and [`ospa_over_time`];
+//! * [`ospa`] and [`gospa`] between point sets, [`ospa_over_time`] and [`gospa_over_time`];
 //! * the seed papers' metrics: [`mae`] / [`mmae`] (GDT), [`success_rate`] (SR and FAF of the
 //!   SMC-PHD paper), [`distance_error_series`] (HMM), [`mean_error_per_track`] (audio-video
 //!   fusion) and [`association_scores`] (MCMCDA's association F1).
@@ -46,7 +46,7 @@ pub use clear::{ClearMetrics, clear_mot};
 pub use error::{Error, Result};
 pub use hota::{ALPHAS, HotaMetrics, hota};
 pub use identity::{IdentityMetrics, identity};
-pub use ospa::{Gospa, Ospa, OspaConfig, gospa, ospa, ospa_over_time};
+pub use ospa::{Gospa, Ospa, OspaConfig, gospa, gospa_over_time, ospa, ospa_over_time};
 pub use seed::{
     AssociationScores, Mae, SuccessRate, TrackError, association_scores, distance_error_series,
     mae, mean_error_per_track, mmae, success_rate,

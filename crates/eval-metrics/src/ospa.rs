@@ -166,6 +166,24 @@ pub fn ospa_over_time(
     pred: &TrackSet,
     cfg: &OspaConfig,
 ) -> Result<Vec<(Frame, Ospa)>> {
+    per_frame(gt, pred, |x, y| ospa(x, y, cfg))
+}
+
+/// GOSPA at every frame of the union of both sets' frame ranges.
+pub fn gospa_over_time(
+    gt: &TrackSet,
+    pred: &TrackSet,
+    cfg: &OspaConfig,
+) -> Result<Vec<(Frame, Gospa)>> {
+    per_frame(gt, pred, |x, y| gospa(x, y, cfg))
+}
+
+/// `metric` between the two sets' positions at each frame of the union of their ranges.
+fn per_frame<M>(
+    gt: &TrackSet,
+    pred: &TrackSet,
+    metric: impl Fn(&[Point2], &[Point2]) -> Result<M>,
+) -> Result<Vec<(Frame, M)>> {
     let range = match (gt.frame_range(), pred.frame_range()) {
         (None, None) => return Ok(Vec::new()),
         (Some(a), None) | (None, Some(a)) => a,
@@ -176,6 +194,6 @@ pub fn ospa_over_time(
     xs.iter()
         .zip(&ys)
         .zip(range.0..)
-        .map(|((x, y), frame)| Ok((frame, ospa(x, y, cfg)?)))
+        .map(|((x, y), frame)| Ok((frame, metric(x, y)?)))
         .collect()
 }

@@ -90,6 +90,22 @@ pub enum TrackInit {
     },
 }
 
+/// How the posterior scores the end of a track whose last measurement comes before the last
+/// scan.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum TrackEnd {
+    /// TAC 2009 eq. 7 (and the authors' code): the target disappeared right after its last
+    /// detection, a factor p_z (default).
+    Disappeared,
+    /// The exact probability of no further detection in the window: the target disappears
+    /// at some later scan, undetected until then, or survives undetected to the window's end,
+    /// Σ_{j<n} s^j p_z + s^n with s = (1 − p_z)(1 − p_d) over the n remaining scans. With a
+    /// small p_z the paper's factor makes a target that is missed in the last scans look
+    /// like clutter or part of another track; this one does not.
+    Undetected,
+}
+
 /// Weights of the move distribution ξ_K; moves not allowed with K tracks get weight 0 and
 /// the rest are renormalised. The paper's experiments use uniform weights (default).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -132,10 +148,18 @@ pub struct McmcdaConfig {
     pub stop_probability: f64,
     /// ζ, the gap distribution.
     pub gap_distribution: GapDistribution,
+    /// Probability that an extension, reduction or update acts on the track's head (its
+    /// earliest measurements, growing backwards in time) instead of its tail. The paper's
+    /// moves act on the tail only (0); then a track's first measurement can change only
+    /// through death and rebirth, which the chain almost never does, so a wrong start
+    /// persists. Default 0.5.
+    pub head_probability: f64,
     /// ξ, the move weights.
     pub move_weights: MoveWeights,
     /// How track filters start.
     pub track_init: TrackInit,
+    /// How a track's end is scored.
+    pub track_end: TrackEnd,
 }
 
 impl Default for McmcdaConfig {
@@ -153,10 +177,12 @@ impl Default for McmcdaConfig {
             max_speed: 100.0,
             stop_probability: 0.5,
             gap_distribution: GapDistribution::Geometric,
+            head_probability: 0.5,
             move_weights: MoveWeights::default(),
             track_init: TrackInit::FirstMeasurement {
                 velocity_variance: None,
             },
+            track_end: TrackEnd::Disappeared,
         }
     }
 }
@@ -221,6 +247,12 @@ impl McmcdaConfig {
         check_probability_open(self.p_detect, "p_detect")?;
         check_probability_open(self.stop_probability, "stop_probability")?;
         check_positive(self.max_speed, "max_speed")?;
+        if !(0.0..=1.0).contains(&self.head_probability) {
+            return Err(Error::Invalid(format!(
+                "head_probability {} must lie in [0, 1]",
+                self.head_probability
+            )));
+        }
         if self.max_gap == 0 || self.max_gap > 64 {
             return Err(Error::Invalid(format!(
                 "max_gap is {}; it must lie in 1..=64",
@@ -293,6 +325,20 @@ impl McmcdaConfig {
 }
 
 impl Model {
+    /// log P(no detection in the `n` ≥ 1 scans after a track's last measurement), under
+    /// the configured [`TrackEnd`].
+    pub(crate) fn log_track_end(&self, n: usize) -> f64 {
+        match self.config.track_end {
+            TrackEnd::Disappeared => self.log_p_z,
+            TrackEnd::Undetected => {
+                let p_z = self.config.p_disappear;
+                let s = (1.0 - p_z) * (1.0 - self.config.p_detect);
+                let s_n = s.powi(n as i32);
+                (p_z * (1.0 - s_n) / (1.0 - s) + s_n).ln()
+            }
+        }
+    }
+
     /// The configuration this model was checked from.
     pub fn config(&self) -> &McmcdaConfig {
         &self.config

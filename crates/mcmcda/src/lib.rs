@@ -25,6 +25,8 @@
 
 mod config;
 mod error;
+mod estimates;
+mod nearest;
 mod partition;
 mod problem;
 mod proposal;
@@ -35,8 +37,12 @@ mod track_filter;
 #[cfg(test)]
 mod tests;
 
-pub use config::{GapDistribution, McmcdaConfig, Model, Move, MoveWeights, TrackInit};
+pub use config::{GapDistribution, McmcdaConfig, Model, Move, MoveWeights, TrackEnd, TrackInit};
 pub use error::{Error, Result};
+pub use estimates::{measurement_labels, smoothed_tracks, tracks_by_origin};
+pub use nearest::{
+    Assignment, NearestNeighbourConfig, greedy_initial_partition, nearest_neighbour_tracks,
+};
 pub use partition::Partition;
 pub use problem::{MeasId, Problem};
 pub use sampler::{Chain, McmcdaRun, MoveStats, run_chains};

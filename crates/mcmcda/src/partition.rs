@@ -228,6 +228,17 @@ impl<'a> Partition<'a> {
         }
     }
 
+    /// The measurements a track may hold before `m`: those y' of scan t_m − d with
+    /// y_m ∈ L(y', t_m − d, d), restricted to the window.
+    #[inline]
+    pub(crate) fn predecessors(&self, m: MeasId, d: usize) -> &[MeasId] {
+        if self.problem.scan_of(m) < self.lo + d {
+            &[]
+        } else {
+            self.problem.backward(m, d)
+        }
+    }
+
     /// Checks every invariant of the partition and its caches (for tests and debugging):
     /// Ω's constraints, the owner and slot maps, and each cached weight against a fresh
     /// filter.

@@ -22,7 +22,24 @@ fn log_sum_exp(terms: &[f64]) -> f64 {
     max + terms.iter().map(|t| (t - max).exp()).sum::<f64>().ln()
 }
 
+/// Which end of a track a move grows or cuts: the paper's moves act on the tail; the head
+/// variants are their mirror images in time (see [`crate::McmcdaConfig::head_probability`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum End {
+    Tail,
+    Head,
+}
+
 impl Partition<'_> {
+    /// The measurements next to `m` at gap `d` in the direction of `end`.
+    #[inline]
+    fn neighbours(&self, m: MeasId, d: usize, end: End) -> &[MeasId] {
+        match end {
+            End::Tail => self.successors(m, d),
+            End::Head => self.predecessors(m, d),
+        }
+    }
+
     /// Draws d ~ ζ.
     pub(crate) fn sample_gap<R: Rng + ?Sized>(&self, rng: &mut R) -> usize {
         let u: f64 = rng.random();
@@ -30,23 +47,23 @@ impl Partition<'_> {
         cdf.iter().position(|c| u < *c).unwrap_or(cdf.len() - 1) + 1
     }
 
-    /// |L(y_m, t_m, d) ∩ Free| within the window.
-    pub(crate) fn free_successor_count(&self, m: MeasId, d: usize) -> usize {
-        self.successors(m, d)
+    /// |L(y_m, t_m, d) ∩ Free| within the window (or its mirror image towards the head).
+    pub(crate) fn free_neighbour_count(&self, m: MeasId, d: usize, end: End) -> usize {
+        self.neighbours(m, d, end)
             .iter()
             .filter(|&&n| self.is_free(n))
             .count()
     }
 
-    fn has_free_successor(&self, m: MeasId, d: usize) -> bool {
-        self.successors(m, d).iter().any(|&n| self.is_free(n))
+    fn has_free_neighbour(&self, m: MeasId, d: usize, end: End) -> bool {
+        self.neighbours(m, d, end).iter().any(|&n| self.is_free(n))
     }
 
     /// log of the probability that growth stops at `m`: γ, or "go on" and then find the drawn
     /// gap's candidate set empty, γ + (1 − γ) Σ_{d: C(d) = ∅} ζ(d).
-    fn log_stop_at(&self, m: MeasId) -> f64 {
+    fn log_stop_at(&self, m: MeasId, end: End) -> f64 {
         let empty_mass: f64 = (1..=self.problem.max_gap())
-            .filter(|&d| !self.has_free_successor(m, d))
+            .filter(|&d| !self.has_free_neighbour(m, d, end))
             .map(|d| self.model.zeta[d - 1])
             .sum();
         let gamma = self.model.config.stop_probability;
@@ -55,11 +72,13 @@ impl Partition<'_> {
 
     /// Grows a track from `start`, appending to `out`: repeat { stop with probability γ
     /// (unless this is a mandatory step); draw d ~ ζ; C = L(y, t, d) ∩ Free; stop if C is
-    /// empty; append a uniform member of C }. Returns false if a mandatory step found C
-    /// empty (the move is rejected).
+    /// empty; append a uniform member of C }. Towards the head, "after" reads "before" and
+    /// `out` receives measurements in growth order (backwards in time). Returns false if a
+    /// mandatory step found C empty (the move is rejected).
     pub(crate) fn grow<R: Rng + ?Sized>(
         &self,
         start: MeasId,
+        end: End,
         mut mandatory: bool,
         out: &mut Vec<MeasId>,
         candidates: &mut Vec<MeasId>,
@@ -74,7 +93,7 @@ impl Partition<'_> {
             let d = self.sample_gap(rng);
             candidates.clear();
             candidates.extend(
-                self.successors(y, d)
+                self.neighbours(y, d, end)
                     .iter()
                     .copied()
                     .filter(|&n| self.is_free(n)),
@@ -88,11 +107,12 @@ impl Partition<'_> {
         }
     }
 
-    /// log P(growing from `start` yields exactly `tail`), in this partition (whose free set
-    /// must be the one growth ran with).
+    /// log P(growing from `start` towards `end` yields exactly `tail`, in growth order), in
+    /// this partition (whose free set must be the one growth ran with).
     pub(crate) fn log_grow_probability(
         &self,
         start: MeasId,
+        end: End,
         tail: &[MeasId],
         mandatory_first: bool,
     ) -> f64 {
@@ -106,17 +126,25 @@ impl Partition<'_> {
                 lp += self.model.log_go_on;
             }
             let (t, t_next) = (self.problem.scan_of(y), self.problem.scan_of(next));
-            if t_next <= t || t_next - t > self.problem.max_gap() || !self.is_free(next) {
+            let (earlier, later) = match end {
+                End::Tail => (t, t_next),
+                End::Head => (t_next, t),
+            };
+            if later <= earlier
+                || later - earlier > self.problem.max_gap()
+                || !self.is_free(next)
+                || (end == End::Head && earlier < self.lo)
+            {
                 return f64::NEG_INFINITY;
             }
-            let d = t_next - t;
+            let d = later - earlier;
             if !self.problem.within(y, next, d) {
                 return f64::NEG_INFINITY;
             }
-            lp += self.model.log_zeta[d - 1] - (self.free_successor_count(y, d) as f64).ln();
+            lp += self.model.log_zeta[d - 1] - (self.free_neighbour_count(y, d, end) as f64).ln();
             y = next;
         }
-        lp + self.log_stop_at(y)
+        lp + self.log_stop_at(y, end)
     }
 
     /// The birth set L^B(t, d): free measurements of scan t with a non-empty L(y, t, d).
@@ -137,7 +165,7 @@ impl Partition<'_> {
         );
         let d1 = t2 - t1;
         let n_births = self.birth_set_count(t1, d1);
-        let n_second = self.free_successor_count(track[0], d1);
+        let n_second = self.free_neighbour_count(track[0], d1, End::Tail);
         if n_births == 0 || n_second == 0 {
             return f64::NEG_INFINITY;
         }
@@ -148,7 +176,7 @@ impl Partition<'_> {
             + self.model.log_zeta[d1 - 1]
             - (n_births as f64).ln()
             - (n_second as f64).ln()
-            + self.log_grow_probability(track[1], &track[2..], false)
+            + self.log_grow_probability(track[1], End::Tail, &track[2..], false)
     }
 
     /// |S(ω)|: the split points (k, i) with |τ_k| ≥ 4 and both parts keeping ≥ 2.
@@ -234,22 +262,40 @@ impl Partition<'_> {
     }
 
     /// log q(τ → τ') for the moves that change one track and keep K (extension, reduction,
-    /// update), summed over every way of producing τ'. Evaluated in the partition *without*
-    /// the track (its measurements free): growth after position r only looks at later scans,
-    /// where that free set is exactly the one each move grew with. `k` is K in ω.
+    /// update, at either end), summed over every way of producing τ'. Evaluated in the
+    /// partition *without* the track (its measurements free): growth beyond the kept part
+    /// only looks at scans the kept part does not occupy, where that free set is exactly the
+    /// one each move grew with. `k` is K in ω.
     pub(crate) fn log_single_track_probability(
         &self,
         k: usize,
         from: &[MeasId],
         to: &[MeasId],
     ) -> f64 {
+        let head = self.model.config.head_probability;
+        let mut terms = Vec::new();
+        if head < 1.0 {
+            let tail_terms = self.one_end_terms(k, from, to, End::Tail);
+            terms.extend(tail_terms.into_iter().map(|t| t + (-head).ln_1p()));
+        }
+        if head > 0.0 {
+            let rev = |v: &[MeasId]| v.iter().rev().copied().collect::<Vec<_>>();
+            let head_terms = self.one_end_terms(k, &rev(from), &rev(to), End::Head);
+            terms.extend(head_terms.into_iter().map(|t| t + head.ln()));
+        }
+        log_sum_exp(&terms) - (k as f64).ln()
+    }
+
+    /// The log-probability terms of producing `to` from `from` at one end, given that end was
+    /// chosen and the track drawn; both sequences are in growth order from the kept end.
+    fn one_end_terms(&self, k: usize, from: &[MeasId], to: &[MeasId], end: End) -> Vec<f64> {
         let xi = |m| self.model.move_probability(m, k);
         let common = from.iter().zip(to).take_while(|(a, b)| a == b).count();
         let mut terms: Vec<f64> = Vec::with_capacity(common + 2);
         if to.len() > from.len() && common == from.len() {
             terms.push(
                 xi(Move::Extension).ln()
-                    + self.log_grow_probability(from[common - 1], &to[common..], false),
+                    + self.log_grow_probability(from[common - 1], end, &to[common..], false),
             );
         }
         if from.len() >= 3 && to.len() >= 2 && to.len() < from.len() && common == to.len() {
@@ -257,8 +303,8 @@ impl Partition<'_> {
         }
         let log_update = xi(Move::Update).ln() - (from.len() as f64).ln();
         for r in 1..=common.min(from.len()) {
-            terms.push(log_update + self.log_grow_probability(to[r - 1], &to[r..], r == 1));
+            terms.push(log_update + self.log_grow_probability(to[r - 1], end, &to[r..], r == 1));
         }
-        log_sum_exp(&terms) - (k as f64).ln()
+        terms
     }
 }

@@ -6,7 +6,7 @@
 use nalgebra::{Matrix4, Vector4};
 use tracker_model::{Gaussian, LinearObservation, ObservationModel, TransitionModel};
 
-use crate::config::{Model, TrackInit};
+use crate::config::{Model, TrackEnd, TrackInit};
 use crate::error::Result;
 use crate::partition::Partition;
 use crate::problem::{MeasId, Problem};
@@ -53,6 +53,12 @@ pub fn log_posterior_by_counts(
             .count();
         let g = c + a - d;
         let f = problem.scan(t).len() - d;
+        // With TrackEnd::Undetected each track's end is scored below instead of by z_t.
+        let z = if cfg.track_end == TrackEnd::Disappeared {
+            z
+        } else {
+            0
+        };
         let counts = [z, c, d, g, a, f].map(|v| v as f64);
         let logs = [
             cfg.p_disappear.ln(),
@@ -66,6 +72,16 @@ pub fn log_posterior_by_counts(
     }
     for tr in tracks {
         lp += track_log_likelihood(model, problem, &sensor, tr)?;
+        let remaining = hi - problem.scan_of(tr[tr.len() - 1]);
+        if cfg.track_end == TrackEnd::Undetected && remaining > 0 {
+            // Σ over when the target disappeared unseen, or that it survived unseen.
+            let s = (1.0 - cfg.p_disappear) * (1.0 - cfg.p_detect);
+            let p: f64 = (0..remaining)
+                .map(|j| s.powi(j as i32) * cfg.p_disappear)
+                .sum::<f64>()
+                + s.powi(remaining as i32);
+            lp += p.ln();
+        }
         if let TrackInit::TwoPoint { .. } = cfg.track_init {
             lp -= (std::f64::consts::PI * cfg.max_speed.powi(2)).ln();
         }

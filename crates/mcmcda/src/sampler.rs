@@ -11,6 +11,7 @@ use crate::config::Move;
 use crate::error::Result;
 use crate::partition::{Partition, TrackState};
 use crate::problem::MeasId;
+use crate::proposal::End;
 
 /// How often each move was proposed and accepted.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -218,7 +219,14 @@ impl<'a, R: Rng> Chain<'a, R> {
         }
         let y2 = self.candidates[self.rng.random_range(0..self.candidates.len())];
         let mut track = vec![y1, y2];
-        s.grow(y2, false, &mut track, &mut self.candidates, &mut self.rng);
+        s.grow(
+            y2,
+            End::Tail,
+            false,
+            &mut track,
+            &mut self.candidates,
+            &mut self.rng,
+        );
         let log_q_forward = s.log_birth_probability(&track);
         let k_new = s.n_tracks() + 1;
         let log_q_reverse = s.model.move_probability(Move::Death, k_new).ln() - (k_new as f64).ln();
@@ -313,18 +321,33 @@ impl<'a, R: Rng> Chain<'a, R> {
         self.finish_replacing(delta, log_q_forward, log_q_reverse, 1, vec![a, b])
     }
 
-    /// Extension, reduction or update of one track (all keep K; q sums over the three).
+    /// Extension, reduction or update of one track at its tail or (mirrored in time) its
+    /// head; K is unchanged and q sums over every way of producing the new track.
     fn single_track(&mut self, m: Move) -> Outcome {
         let k = self.state.n_tracks();
         let victim = self.rng.random_range(0..k);
+        let end = if self
+            .rng
+            .random_bool(self.state.model.config.head_probability)
+        {
+            End::Head
+        } else {
+            End::Tail
+        };
         let old = self.state.remove(victim);
-        let len = old.meas.len();
+        // Work in growth order: from the kept end outwards.
+        let mut from = old.meas.clone();
+        if end == End::Head {
+            from.reverse();
+        }
+        let len = from.len();
         self.grown.clear();
         let proposed = match m {
             Move::Extension => {
-                self.grown.extend_from_slice(&old.meas);
+                self.grown.extend_from_slice(&from);
                 self.state.grow(
-                    old.meas[len - 1],
+                    from[len - 1],
+                    end,
                     false,
                     &mut self.grown,
                     &mut self.candidates,
@@ -334,14 +357,15 @@ impl<'a, R: Rng> Chain<'a, R> {
             }
             Move::Reduction if len >= 3 => {
                 let r = self.rng.random_range(2..len);
-                self.grown.extend_from_slice(&old.meas[..r]);
+                self.grown.extend_from_slice(&from[..r]);
                 true
             }
             Move::Update => {
                 let r = self.rng.random_range(1..=len);
-                self.grown.extend_from_slice(&old.meas[..r]);
+                self.grown.extend_from_slice(&from[..r]);
                 self.state.grow(
-                    old.meas[r - 1],
+                    from[r - 1],
+                    end,
                     r == 1,
                     &mut self.grown,
                     &mut self.candidates,
@@ -354,11 +378,14 @@ impl<'a, R: Rng> Chain<'a, R> {
             self.state.reinsert(old);
             return Outcome::Rejected;
         }
-        if self.grown == old.meas {
+        if self.grown == from {
             self.state.reinsert(old);
             return Outcome::Accepted;
         }
-        let new = std::mem::take(&mut self.grown);
+        let mut new = std::mem::take(&mut self.grown);
+        if end == End::Head {
+            new.reverse();
+        }
         let log_q_forward = self.state.log_single_track_probability(k, &old.meas, &new);
         let log_q_reverse = self.state.log_single_track_probability(k, &new, &old.meas);
         let keep = old

@@ -22,7 +22,7 @@ pub(crate) struct Node {
 const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
 impl Model {
-    fn first_node(&self, problem: &Problem, meas: &[MeasId]) -> Node {
+    pub(crate) fn first_node(&self, problem: &Problem, meas: &[MeasId]) -> Node {
         let y1 = problem.position(meas[0]);
         let r = self.config.measurement_noise;
         match self.config.track_init {
@@ -60,8 +60,9 @@ impl Model {
         }
     }
 
-    /// Predict over `gap` scans and update with `y`.
-    fn step(&self, node: &Node, y: Vector2<f64>, gap: usize) -> Node {
+    /// Predict over `gap` scans and update with `y`; also returns the innovation's squared
+    /// Mahalanobis distance (for gating).
+    pub(crate) fn step(&self, node: &Node, y: Vector2<f64>, gap: usize) -> (Node, f64) {
         let tau = gap as f64 * self.config.motion.dt_s();
         let p = &node.cov;
         let x = &node.mean;
@@ -90,11 +91,12 @@ impl Model {
         let gain = ph * s_inv;
         let mean = mean_pred + gain * residual;
         let cov = cov_pred - gain * ph.transpose();
-        Node {
+        let next = Node {
             mean,
             cov: (cov + cov.transpose()) * 0.5,
             cum_log_likelihood: node.cum_log_likelihood + log_likelihood,
-        }
+        };
+        (next, maha)
     }
 
     /// Filters `meas` (scan-ordered, ≥ 2 measurements) into `nodes`, reusing the first
@@ -113,14 +115,15 @@ impl Model {
         }
         for i in nodes.len()..meas.len() {
             let gap = problem.scan_of(meas[i]) - problem.scan_of(meas[i - 1]);
-            let next = self.step(&nodes[i - 1], problem.position(meas[i]), gap);
+            let (next, _) = self.step(&nodes[i - 1], problem.position(meas[i]), gap);
             nodes.push(next);
         }
     }
 
     /// The track's term of the log posterior (all terms of TAC 2009 eq. 9 that the track
     /// changes, with the false-alarm baseline taken out):
-    /// log λ_b + [ends before the last scan] log p_z + (t_last − t_first) log(1 − p_z)
+    /// log λ_b + [ends before the last scan] log p_z (or see [`crate::TrackEnd`])
+    /// + (t_last − t_first) log(1 − p_z)
     /// + |τ| (log p_d − log λ_f) + (t_last − t_first + 1 − |τ|) log(1 − p_d) + Σ log N(...).
     pub(crate) fn track_weight(
         &self,
@@ -137,7 +140,7 @@ impl Model {
         let span = (t_last - t_first) as f64;
         let n = meas.len() as f64;
         let ends = if t_last < last_scan {
-            self.log_p_z
+            self.log_track_end(last_scan - t_last)
         } else {
             0.0
         };

@@ -9,6 +9,7 @@ use crate::scenario::{PipelineOutput, Scenario};
 mod gdt;
 mod hmm;
 mod kalman;
+mod mcmcda_batch;
 mod mot_eval;
 mod simulator;
 
@@ -20,6 +21,7 @@ const PIPELINES: &[(&str, PipelineFn)] = &[
     ("gdt-gaps", gdt::run),
     ("hmm-tracking", hmm::run),
     ("kalman-crossing", kalman::run),
+    ("mcmcda-batch", mcmcda_batch::run),
     ("mot-eval", mot_eval::run),
     ("simulator-poisson", simulator::run),
 ];

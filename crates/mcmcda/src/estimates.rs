@@ -1,0 +1,102 @@
+//! From a partition to what users want: smoothed trajectories, and per-scan labels of the
+//! measurements for association scoring.
+
+use nalgebra::{Matrix4, Vector4};
+use tracker_model::{
+    Gaussian, LinearObservation, Track, TrackId, TrackPoint, TrackSet, filter, smooth,
+};
+
+use crate::config::Model;
+use crate::error::Result;
+use crate::problem::{MeasId, Problem};
+
+/// Kalman-smoothed states of each track at every frame from its first to its last
+/// measurement (missed scans filled by the smoother), one scan period per step. Track i gets
+/// id `first_id + i`. The filter starts at the first measurement with position covariance R
+/// and the configured initial velocity variance per axis (v̄²/3 for the two-point start).
+pub fn smoothed_tracks(
+    model: &Model,
+    problem: &Problem,
+    tracks: &[Vec<MeasId>],
+    first_id: u64,
+) -> Result<TrackSet> {
+    let cfg = model.config();
+    let sensor = LinearObservation::leading_components(cfg.measurement_noise)?;
+    let v = match cfg.track_init {
+        crate::TrackInit::FirstMeasurement { .. } => model.initial_velocity_variance,
+        crate::TrackInit::TwoPoint { .. } => cfg.max_speed * cfg.max_speed / 3.0,
+    };
+    let r = cfg.measurement_noise;
+    let mut out = Vec::with_capacity(tracks.len());
+    for (i, track) in tracks.iter().enumerate() {
+        let (Some(&first), Some(&last)) = (track.first(), track.last()) else {
+            continue;
+        };
+        let (t0, t1) = (problem.scan_of(first), problem.scan_of(last));
+        let mut zs = vec![None; t1 - t0 + 1];
+        for &m in &track[1..] {
+            zs[problem.scan_of(m) - t0] = Some(problem.position(m));
+        }
+        let y = problem.position(first);
+        #[rustfmt::skip]
+        let cov = Matrix4::new(
+            r[(0, 0)], r[(0, 1)], 0.0, 0.0,
+            r[(1, 0)], r[(1, 1)], 0.0, 0.0,
+            0.0, 0.0, v, 0.0,
+            0.0, 0.0, 0.0, v,
+        );
+        // The first step has no measurement: its filtered state is this start.
+        let start = Gaussian::new(Vector4::new(y.x, y.y, 0.0, 0.0), cov)?;
+        let run = filter(&cfg.motion, &sensor, &start, &zs)?;
+        let states = smooth(&cfg.motion, &run)?;
+        let points = states
+            .iter()
+            .enumerate()
+            .map(|(k, s)| {
+                let m = s.mean();
+                TrackPoint {
+                    velocity: Some(nalgebra::Vector2::new(m[2], m[3])),
+                    covariance: Some(s.covariance().fixed_view::<2, 2>(0, 0).into_owned()),
+                    ..TrackPoint::at(
+                        problem.first_frame() + (t0 + k) as u32,
+                        nalgebra::Vector2::new(m[0], m[1]),
+                    )
+                }
+            })
+            .collect();
+        out.push(Track::from_points(TrackId(first_id + i as u64), points)?);
+    }
+    Ok(TrackSet::from_tracks(out)?)
+}
+
+/// For each scan, the label (track index) of each of its measurements in the order the
+/// problem holds them, `None` for false alarms: the input of
+/// `eval_metrics::association_scores`.
+pub fn measurement_labels(problem: &Problem, tracks: &[Vec<MeasId>]) -> Vec<Vec<Option<u64>>> {
+    let mut label = vec![None; problem.n_measurements()];
+    for (k, track) in tracks.iter().enumerate() {
+        for &m in track {
+            label[m as usize] = Some(k as u64);
+        }
+    }
+    (0..problem.n_scans())
+        .map(|s| problem.scan(s).iter().map(|&m| label[m as usize]).collect())
+        .collect()
+}
+
+/// The true partition of simulated scans (each target's detections, in scan order), with
+/// measurement ids as [`Problem::from_scans`] gives them (scan by scan, in order). Targets
+/// detected fewer than twice are not tracks.
+pub fn tracks_by_origin(scans: &[tracker_model::Scan]) -> Vec<Vec<MeasId>> {
+    let mut by_target: std::collections::BTreeMap<TrackId, Vec<MeasId>> = Default::default();
+    let mut id: MeasId = 0;
+    for scan in scans {
+        for m in &scan.measurements {
+            if let tracker_model::Origin::Target(t) = m.origin {
+                by_target.entry(t).or_default().push(id);
+            }
+            id += 1;
+        }
+    }
+    by_target.into_values().filter(|t| t.len() >= 2).collect()
+}
