@@ -16,6 +16,7 @@ mod pipelines;
 mod plot;
 mod report;
 mod scenario;
+mod track;
 
 /// Workspace tasks for the tracking toolkit.
 #[derive(Parser)]
@@ -47,6 +48,25 @@ enum Command {
     },
     /// fmt, clippy, tests, docs, bench build and the scenario suite: what CI runs.
     Ci,
+    /// Track MOTChallenge detections (box centres as points) and write MOTChallenge tracks.
+    Track {
+        /// The tracker.
+        #[arg(long, value_enum)]
+        tracker: track::Tracker,
+        /// Detections (frame,id,left,top,width,height,conf,...).
+        #[arg(long)]
+        input: PathBuf,
+        /// Where to write the tracks.
+        #[arg(long)]
+        out: PathBuf,
+        /// TOML with optional [model] (mcmcda::McmcdaConfig), [online] and [gnn] tables;
+        /// without it the model is scaled to the median box width.
+        #[arg(long)]
+        config: Option<PathBuf>,
+        /// Seed of the MCMC generator.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
     /// Score a tracker's MOTChallenge output against MOTChallenge ground truth.
     Eval {
         /// Ground truth (frame,id,left,top,width,height,conf,...); rows with conf 0 are ignored.
@@ -73,6 +93,13 @@ fn main() -> ExitCode {
             filter.as_deref(),
         ),
         Command::Ci => ci::run(),
+        Command::Track {
+            tracker,
+            input,
+            out,
+            config,
+            seed,
+        } => track::run(tracker, &input, &out, config.as_deref(), seed),
         Command::Eval {
             gt,
             pred,

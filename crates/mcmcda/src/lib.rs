@@ -8,6 +8,13 @@
 //! * [`Partition`]: a feasible ω with incremental log posterior;
 //! * [`Chain`] / [`run_chains`]: Algorithm 3 with all eight moves and exact proposal
 //!   probabilities, MAP and MMSE, independent chains in parallel;
+//! * [`OnlineTracker`]: Algorithm 4, sliding-window MCMCDA with persistent track labels;
+//! * [`single_scan_mcmcda`]: Algorithms 1-2, JPDA probabilities β for a known number of
+//!   targets by MCMC, and [`jpda_exact`] by enumeration;
+//! * baselines: [`nearest_neighbour_tracks`] (GNN with M-of-N confirmation, and the greedy
+//!   filter [`greedy_initial_partition`] that starts the chain);
+//! * [`smoothed_tracks`], [`measurement_labels`], [`tracks_by_origin`]: from partitions to
+//!   trajectories and scores;
 //! * [`reference`]: the log posterior from per-scan counts and partition enumeration.
 //!
 //! ```
@@ -27,11 +34,13 @@ mod config;
 mod error;
 mod estimates;
 mod nearest;
+mod online;
 mod partition;
 mod problem;
 mod proposal;
 pub mod reference;
 mod sampler;
+mod single_scan;
 mod track_filter;
 
 #[cfg(test)]
@@ -43,6 +52,8 @@ pub use estimates::{measurement_labels, smoothed_tracks, tracks_by_origin};
 pub use nearest::{
     Assignment, NearestNeighbourConfig, greedy_initial_partition, nearest_neighbour_tracks,
 };
+pub use online::{OnlineConfig, OnlineResult, OnlineStep, OnlineTracker};
 pub use partition::Partition;
 pub use problem::{MeasId, Problem};
 pub use sampler::{Chain, McmcdaRun, MoveStats, run_chains};
+pub use single_scan::{JpdaResult, SingleScanConfig, jpda_exact, single_scan_mcmcda};

@@ -11,7 +11,7 @@ use tracker_model::{ConstantVelocity2, Measurement, Origin, Scan, SimulationConf
 
 use crate::reference::{enumerate_partitions, log_posterior_by_counts};
 use crate::sampler::Chain;
-use crate::{McmcdaConfig, Model, Move, Partition, Problem, TrackInit, run_chains};
+use crate::{McmcdaConfig, Model, Move, Partition, Problem, TrackEnd, TrackInit, run_chains};
 
 fn scan(frame: u32, points: &[(f64, f64)]) -> Scan {
     Scan {
@@ -106,18 +106,32 @@ fn total_variation(
     tv / 2.0
 }
 
+/// The model variants every exactness test runs: both track starts, both track ends, and
+/// the paper's tail-only moves as well as head moves.
+fn variants() -> Vec<(TrackInit, TrackEnd, f64)> {
+    let first = TrackInit::FirstMeasurement {
+        velocity_variance: None,
+    };
+    vec![
+        (first, TrackEnd::Disappeared, 0.5),
+        (
+            TrackInit::TwoPoint {
+                initial_covariance: Matrix4::identity(),
+            },
+            TrackEnd::Disappeared,
+            0.5,
+        ),
+        (first, TrackEnd::Undetected, 0.0),
+    ]
+}
+
 #[test]
 fn chain_matches_the_enumerated_posterior() {
-    for init in [
-        TrackInit::FirstMeasurement {
-            velocity_variance: None,
-        },
-        TrackInit::TwoPoint {
-            initial_covariance: Matrix4::identity(),
-        },
-    ] {
+    for (track_init, track_end, head_probability) in variants() {
         let model = McmcdaConfig {
-            track_init: init,
+            track_init,
+            track_end,
+            head_probability,
             ..tiny_config()
         }
         .check()
@@ -133,11 +147,10 @@ fn chain_matches_the_enumerated_posterior() {
         );
         let empirical = chain_frequencies(&model, &problem, 4, 250_000);
         let tv = total_variation(&exact, &empirical);
-        eprintln!(
-            "{init:?}: {} partitions, top {top:.3}, TV {tv:.4}",
-            exact.len()
+        assert!(
+            tv < 0.02,
+            "{track_init:?}, {track_end:?}, head {head_probability}: total variation {tv}"
         );
-        assert!(tv < 0.02, "{init:?}: total variation {tv}");
     }
 }
 
@@ -153,17 +166,12 @@ fn incremental_posterior_equals_recomputation_after_every_move() {
     .unwrap()
     .simulate(&mut ChaCha8Rng::seed_from_u64(5))
     .unwrap();
-    for init in [
-        TrackInit::FirstMeasurement {
-            velocity_variance: None,
-        },
-        TrackInit::TwoPoint {
-            initial_covariance: Matrix4::identity() * 50.0,
-        },
-    ] {
+    for (track_init, track_end, head_probability) in variants() {
         let model = McmcdaConfig {
             clutter_per_scan: 3.0,
-            track_init: init,
+            track_init,
+            track_end,
+            head_probability,
             ..McmcdaConfig::default()
         }
         .check()
@@ -325,4 +333,79 @@ fn infeasible_partitions_are_rejected_with_reasons() {
             .to_string()
             .contains("too far apart")
     );
+}
+
+#[test]
+fn single_scan_beta_matches_exact_jpda() {
+    use crate::{SingleScanConfig, jpda_exact, single_scan_mcmcda};
+    use nalgebra::Vector4;
+    use tracker_model::{Gaussian, LinearObservation};
+    // Three targets with overlapping gates and five measurements between them.
+    let predicted: Vec<Gaussian<4>> = [(0.0, 0.0), (3.0, 0.5), (1.5, 2.5)]
+        .iter()
+        .map(|&(x, y)| {
+            Gaussian::new(Vector4::new(x, y, 1.0, 0.0), Matrix4::identity() * 2.0).unwrap()
+        })
+        .collect();
+    let sensor = LinearObservation::leading_components(Matrix2::identity()).unwrap();
+    let ys: Vec<Vector2<f64>> = [(0.5, 0.3), (2.2, 0.4), (1.4, 1.6), (3.5, 1.0), (-1.0, 1.2)]
+        .iter()
+        .map(|&(x, y)| Vector2::new(x, y))
+        .collect();
+    let config = SingleScanConfig {
+        clutter_density: 0.02,
+        burn_in: 10_000,
+        samples: 2_000_000,
+        ..SingleScanConfig::default()
+    };
+    let exact = jpda_exact(&predicted, &sensor, &ys, &config).unwrap();
+    let mcmc = single_scan_mcmcda(
+        &predicted,
+        &sensor,
+        &ys,
+        &config,
+        &mut ChaCha8Rng::seed_from_u64(8),
+    )
+    .unwrap();
+    // Ambiguity must be real for the test to mean something.
+    let spread = exact.beta.iter().flatten().filter(|&&b| b > 0.05).count();
+    assert!(spread >= 8, "only {spread} sizeable β");
+    for k in 0..3 {
+        let sum: f64 = exact.beta[k].iter().sum::<f64>() + exact.beta_missed[k];
+        assert!((sum - 1.0).abs() < 1e-12);
+        for j in 0..ys.len() {
+            let (a, b) = (exact.beta[k][j], mcmc.beta[k][j]);
+            assert!((a - b).abs() < 0.01, "β[{k}][{j}]: exact {a}, MCMC {b}");
+        }
+        let d = (exact.states[k].mean() - mcmc.states[k].mean()).norm();
+        assert!(d < 0.02, "target {k} mean differs by {d}");
+    }
+}
+
+#[test]
+fn exact_jpda_of_one_target_is_the_pda_closed_form() {
+    use crate::{SingleScanConfig, jpda_exact};
+    use nalgebra::Vector4;
+    use tracker_model::{Gaussian, LinearObservation, ObservationModel};
+    // With one target, β_j ∝ p_d N(y_j) / λ_f and β_0 ∝ 1 − p_d (the PDA weights).
+    let prior = Gaussian::new(Vector4::new(0.0, 0.0, 0.0, 0.0), Matrix4::identity()).unwrap();
+    let sensor = LinearObservation::leading_components(Matrix2::identity() * 0.5).unwrap();
+    let ys = [Vector2::new(0.3, -0.2), Vector2::new(-1.0, 0.4)];
+    let config = SingleScanConfig {
+        clutter_density: 0.1,
+        ..SingleScanConfig::default()
+    };
+    let out = jpda_exact(std::slice::from_ref(&prior), &sensor, &ys, &config).unwrap();
+    let w: Vec<f64> = ys
+        .iter()
+        .map(|y| {
+            let l = sensor.innovation(&prior, y).unwrap().log_likelihood.exp();
+            config.p_detect * l / config.clutter_density
+        })
+        .collect();
+    let z = 1.0 - config.p_detect + w.iter().sum::<f64>();
+    assert!((out.beta_missed[0] - (1.0 - config.p_detect) / z).abs() < 1e-12);
+    for (b, wj) in out.beta[0].iter().zip(&w) {
+        assert!((b - wj / z).abs() < 1e-12);
+    }
 }

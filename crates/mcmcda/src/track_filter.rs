@@ -157,4 +157,12 @@ impl Node {
     pub(crate) fn cum_log_likelihood(&self) -> f64 {
         self.cum_log_likelihood
     }
+
+    /// The filtered position moved on by `dt` at the filtered velocity.
+    pub(crate) fn position_after(&self, dt: f64) -> Vector2<f64> {
+        Vector2::new(
+            self.mean[0] + dt * self.mean[2],
+            self.mean[1] + dt * self.mean[3],
+        )
+    }
 }

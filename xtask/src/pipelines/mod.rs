@@ -9,7 +9,7 @@ use crate::scenario::{PipelineOutput, Scenario};
 mod gdt;
 mod hmm;
 mod kalman;
-mod mcmcda_batch;
+mod mcmcda;
 mod mot_eval;
 mod simulator;
 
@@ -21,7 +21,9 @@ const PIPELINES: &[(&str, PipelineFn)] = &[
     ("gdt-gaps", gdt::run),
     ("hmm-tracking", hmm::run),
     ("kalman-crossing", kalman::run),
-    ("mcmcda-batch", mcmcda_batch::run),
+    ("mcmcda-batch", mcmcda::batch),
+    ("mcmcda-online", mcmcda::online),
+    ("mcmcda-sweep", mcmcda::sweep),
     ("mot-eval", mot_eval::run),
     ("simulator-poisson", simulator::run),
 ];

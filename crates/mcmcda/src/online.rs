@@ -1,0 +1,319 @@
+//! Online (sliding-window) MCMCDA (TAC 2009 Algorithm 4).
+//!
+//! After each new scan the chain runs on the last `window` scans, starting from the previous
+//! MAP restricted to the window with tracks that were alive greedily extended into the new
+//! scan (as the authors' code does). A scan's associations are final when it leaves the
+//! window; tracks keep their identity across windows through the measurements they share
+//! with the previous MAP. Late measurements join their own scan while it is in the window.
+
+use std::collections::{BTreeMap, HashMap};
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use tracker_model::{Frame, Point2, TrackSet};
+
+use crate::config::Model;
+use crate::error::{Error, Result};
+use crate::estimates::smoothed_tracks;
+use crate::partition::{FREE, Partition};
+use crate::problem::{MeasId, Problem};
+use crate::sampler::Chain;
+
+/// Settings of the online tracker.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OnlineConfig {
+    /// t_win: scans in the sliding window.
+    pub window: usize,
+    /// MCMC samples per window.
+    pub samples_per_scan: u64,
+    /// χ² gate of the greedy extension of live tracks into a new scan.
+    pub extension_gate: f64,
+    /// A track is reported at the current scan if its last measurement is at most this many
+    /// scans old (targets are missed with probability 1 − p_d).
+    pub coast_scans: usize,
+}
+
+impl Default for OnlineConfig {
+    fn default() -> Self {
+        Self {
+            window: 14,
+            samples_per_scan: 2000,
+            extension_gate: 13.8,
+            coast_scans: 2,
+        }
+    }
+}
+
+/// What the tracker believes after a scan.
+#[derive(Debug, Clone, PartialEq)]
+pub struct OnlineStep {
+    /// The scan's frame.
+    pub frame: Frame,
+    /// Position estimates (filtered, predicted over missed scans) of the tracks reported at
+    /// this scan, with their persistent labels.
+    pub estimates: Vec<(u64, Point2)>,
+    /// Log posterior of the window's MAP.
+    pub log_posterior: f64,
+}
+
+/// Everything an online run produced.
+#[derive(Debug, Clone)]
+pub struct OnlineResult {
+    /// Smoothed tracks, labels as ids.
+    pub tracks: TrackSet,
+    /// Each label's measurements (final associations).
+    pub associations: Vec<(u64, Vec<MeasId>)>,
+    /// The measurements, for looking the ids up.
+    pub problem: Problem,
+}
+
+/// The sliding-window tracker. Owns the measurements it has seen.
+pub struct OnlineTracker {
+    model: Model,
+    problem: Problem,
+    config: OnlineConfig,
+    rng: ChaCha8Rng,
+    /// The previous window's MAP with labels.
+    map: Vec<(u64, Vec<MeasId>)>,
+    next_label: u64,
+    /// Final associations of the scans that left the window, by label.
+    committed: BTreeMap<u64, Vec<MeasId>>,
+}
+
+impl OnlineTracker {
+    /// A tracker whose first scan is `first_frame`; every random draw comes from ChaCha8
+    /// seeded with `seed`.
+    pub fn new(model: Model, first_frame: Frame, config: OnlineConfig, seed: u64) -> Result<Self> {
+        if config.window < 2 {
+            return Err(Error::Invalid(format!(
+                "window of {} scans; it needs at least 2",
+                config.window
+            )));
+        }
+        Ok(Self {
+            problem: Problem::empty(&model, first_frame),
+            model,
+            config,
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            map: Vec::new(),
+            next_label: 0,
+            committed: BTreeMap::new(),
+        })
+    }
+
+    /// The measurements received so far.
+    pub fn problem(&self) -> &Problem {
+        &self.problem
+    }
+
+    fn window_start(&self) -> usize {
+        self.problem.n_scans().saturating_sub(self.config.window)
+    }
+
+    /// The first scan whose associations are not final yet.
+    fn open_from(&self) -> usize {
+        if self.problem.n_scans() >= self.config.window {
+            self.window_start() + 1
+        } else {
+            0
+        }
+    }
+
+    /// Adds a measurement that arrived late for `frame`, whose scan must still be open (in
+    /// the next window); it is used from the next window on.
+    pub fn add_late(&mut self, frame: Frame, position: Point2) -> Result<MeasId> {
+        let lo = self.problem.first_frame() + self.open_from() as Frame;
+        if frame < lo {
+            return Err(Error::Invalid(format!(
+                "late measurement for frame {frame} arrives after its scan left the window \
+                 (which starts at frame {lo})"
+            )));
+        }
+        self.problem.add_measurement(frame, position)
+    }
+
+    /// Processes the scan at `frame` (after any empty scans needed to reach it).
+    pub fn push_scan(&mut self, frame: Frame, points: &[Point2]) -> Result<OnlineStep> {
+        self.problem.push_scan(frame, points)?;
+        let hi = self.problem.n_scans() - 1;
+        let lo = self.window_start();
+        let mut start = Partition::empty(&self.model, &self.problem, lo..=hi)?;
+        for (_, track) in &self.map {
+            let kept: Vec<MeasId> = track
+                .iter()
+                .copied()
+                .filter(|&m| self.problem.scan_of(m) >= lo)
+                .collect();
+            if kept.len() >= 2 {
+                start.insert(kept, None);
+            }
+        }
+        extend_into_last_scan(&mut start, self.config.extension_gate);
+        let mut chain = Chain::new(start, &mut self.rng);
+        chain.run(self.config.samples_per_scan);
+        let (best, log_posterior) = chain.map();
+        let best = best.to_vec();
+        drop(chain);
+        self.map = relabel(&self.map, best, &mut self.next_label);
+        // The window's first scan leaves with the next scan: its associations are final.
+        if hi + 1 >= self.config.window {
+            self.commit(lo..=lo);
+        }
+        let map_partition = Partition::from_tracks(
+            &self.model,
+            &self.problem,
+            lo..=hi,
+            &self.map.iter().map(|(_, t)| t.clone()).collect::<Vec<_>>(),
+        )?;
+        let estimates = self
+            .map
+            .iter()
+            .zip(&map_partition.tracks)
+            .filter_map(|((label, track), state)| {
+                let last = self.problem.scan_of(track[track.len() - 1]);
+                (hi - last <= self.config.coast_scans).then(|| {
+                    let node = &state.nodes[state.nodes.len() - 1];
+                    (
+                        *label,
+                        node.position_after((hi - last) as f64 * self.model.config().motion.dt_s()),
+                    )
+                })
+            })
+            .collect();
+        Ok(OnlineStep {
+            frame: self.problem.first_frame() + hi as Frame,
+            estimates,
+            log_posterior,
+        })
+    }
+
+    fn commit(&mut self, scans: std::ops::RangeInclusive<usize>) {
+        for (label, track) in &self.map {
+            let in_scans = track
+                .iter()
+                .filter(|&&m| scans.contains(&self.problem.scan_of(m)));
+            let entry = self.committed.entry(*label).or_default();
+            entry.extend(in_scans);
+        }
+    }
+
+    /// Commits the current window and returns every track (label as id) smoothed over its
+    /// committed measurements, with the associations.
+    pub fn finish(mut self) -> Result<OnlineResult> {
+        let open = self.open_from();
+        if open < self.problem.n_scans() {
+            self.commit(open..=self.problem.n_scans() - 1);
+        }
+        let mut tracks = TrackSet::new();
+        let mut associations = Vec::new();
+        for (label, meas) in self.committed {
+            if meas.len() < 2 {
+                continue;
+            }
+            let one = smoothed_tracks(
+                &self.model,
+                &self.problem,
+                std::slice::from_ref(&meas),
+                label,
+            )?;
+            for t in one.tracks() {
+                tracks.push(t.clone())?;
+            }
+            associations.push((label, meas));
+        }
+        Ok(OnlineResult {
+            tracks,
+            associations,
+            problem: self.problem,
+        })
+    }
+}
+
+/// Greedily extends every track that can still grow into the last scan of the window, by
+/// increasing innovation cost, gated.
+fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64) {
+    let (model, problem, hi) = (partition.model, partition.problem, partition.hi);
+    let mut pairs: Vec<(f64, usize, MeasId)> = Vec::new();
+    for (k, t) in partition.tracks.iter().enumerate() {
+        let last = t.meas[t.meas.len() - 1];
+        let gap = hi - problem.scan_of(last);
+        if gap == 0 || gap > problem.max_gap() {
+            continue;
+        }
+        for &m in problem.forward(last, gap) {
+            if partition.owner[m as usize] != FREE {
+                continue;
+            }
+            let node = &t.nodes[t.nodes.len() - 1];
+            let (next, maha) = model.step(node, problem.position(m), gap);
+            if maha <= gate {
+                pairs.push((node.cum_log_likelihood() - next.cum_log_likelihood(), k, m));
+            }
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut extended: HashMap<usize, MeasId> = HashMap::new();
+    let mut taken: Vec<MeasId> = Vec::new();
+    for (_, k, m) in pairs {
+        if !extended.contains_key(&k) && !taken.contains(&m) {
+            extended.insert(k, m);
+            taken.push(m);
+        }
+    }
+    // Replace the extended tracks (highest index first, so lower indices stay put).
+    let mut ks: Vec<usize> = extended.keys().copied().collect();
+    ks.sort_unstable_by(|a, b| b.cmp(a));
+    for k in ks {
+        let old = partition.remove(k);
+        let mut meas = old.meas.clone();
+        meas.push(extended[&k]);
+        let keep = old.meas.len();
+        partition.insert(meas, Some((&old.nodes, keep)));
+    }
+}
+
+/// Labels the new MAP's tracks: each takes the label of the previous track it shares the most
+/// measurements with (each label used once, larger overlaps first); the rest get new labels.
+fn relabel(
+    previous: &[(u64, Vec<MeasId>)],
+    tracks: Vec<Vec<MeasId>>,
+    next_label: &mut u64,
+) -> Vec<(u64, Vec<MeasId>)> {
+    let owner: HashMap<MeasId, u64> = previous
+        .iter()
+        .flat_map(|(l, t)| t.iter().map(move |&m| (m, *l)))
+        .collect();
+    let mut overlaps: Vec<(usize, usize, u64)> = Vec::new();
+    for (i, t) in tracks.iter().enumerate() {
+        let mut count: BTreeMap<u64, usize> = BTreeMap::new();
+        for m in t {
+            if let Some(&l) = owner.get(m) {
+                *count.entry(l).or_default() += 1;
+            }
+        }
+        overlaps.extend(count.into_iter().map(|(l, n)| (n, i, l)));
+    }
+    // Larger overlaps first; ties by track then label, for determinism.
+    overlaps.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let mut label_of: Vec<Option<u64>> = vec![None; tracks.len()];
+    let mut used: Vec<u64> = Vec::new();
+    for (_, i, l) in overlaps {
+        if label_of[i].is_none() && !used.contains(&l) {
+            label_of[i] = Some(l);
+            used.push(l);
+        }
+    }
+    tracks
+        .into_iter()
+        .zip(label_of)
+        .map(|(t, l)| {
+            let label = l.unwrap_or_else(|| {
+                *next_label += 1;
+                *next_label - 1
+            });
+            (label, t)
+        })
+        .collect()
+}

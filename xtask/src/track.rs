@@ -1,0 +1,178 @@
+//! `cargo xtask track --tracker mcmcda|gnn --input DETS.txt --out TRACKS.txt`: runs a tracker
+//! on MOTChallenge detections (box centres as point measurements) and writes MOTChallenge
+//! tracks (smoothed centres, each track's mean detection size).
+
+use std::fs;
+use std::io::BufReader;
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use clap::ValueEnum;
+use mcmcda::{
+    McmcdaConfig, MeasId, NearestNeighbourConfig, OnlineConfig, OnlineTracker, Problem, TrackEnd,
+    TrackInit, nearest_neighbour_tracks, smoothed_tracks,
+};
+use nalgebra::Matrix2;
+use serde::Deserialize;
+use tracker_model::{
+    BoundingBox, ConstantVelocity2, Frame, MotRow, Point2, Track, TrackPoint, TrackSet, format_mot,
+    parse_mot,
+};
+
+use crate::Outcome;
+
+/// Which tracker `track` runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Tracker {
+    /// Online sliding-window MCMCDA.
+    Mcmcda,
+    /// Global nearest neighbour with M-of-N confirmation.
+    Gnn,
+}
+
+/// The optional `--config` TOML: any of the three tables, each field optional.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TrackConfig {
+    model: Option<McmcdaConfig>,
+    #[serde(default)]
+    online: OnlineConfig,
+    #[serde(default)]
+    gnn: NearestNeighbourConfig,
+}
+
+/// A model scaled to the detections when no `--config` model is given: lengths follow the
+/// median box width w (measurement σ = 0.1 w, speed ≤ w per frame, acceleration σ = 0.05 w),
+/// the region is the detections' bounding box.
+fn default_model(rows: &[MotRow]) -> Result<McmcdaConfig> {
+    let mut widths: Vec<f64> = rows.iter().map(|r| r.bbox.width).collect();
+    widths.sort_by(f64::total_cmp);
+    let w = widths[widths.len() / 2].max(1.0);
+    let (mut lo, mut hi) = (
+        Point2::repeat(f64::INFINITY),
+        Point2::repeat(f64::NEG_INFINITY),
+    );
+    for r in rows {
+        let c = r.bbox.centre();
+        lo = lo.inf(&c);
+        hi = hi.sup(&c);
+    }
+    let extent = hi - lo;
+    let volume = (extent.x.max(w) * extent.y.max(w)).max(1.0);
+    Ok(McmcdaConfig {
+        volume,
+        births_per_scan: 0.1,
+        clutter_per_scan: 1.0,
+        p_disappear: 0.01,
+        p_detect: 0.8,
+        motion: ConstantVelocity2::mcmcda(1.0, (0.05 * w).powi(2))?,
+        measurement_noise: Matrix2::identity() * (0.1 * w).powi(2),
+        max_speed: w,
+        track_init: TrackInit::FirstMeasurement {
+            velocity_variance: Some((0.3 * w).powi(2)),
+        },
+        track_end: TrackEnd::Undetected,
+        ..McmcdaConfig::default()
+    })
+}
+
+/// Runs the command.
+#[expect(clippy::print_stdout, reason = "a one-line summary on the terminal")]
+pub fn run(
+    tracker: Tracker,
+    input: &Path,
+    out: &Path,
+    config: Option<&Path>,
+    seed: u64,
+) -> Outcome {
+    let file = fs::File::open(input).with_context(|| format!("cannot open {}", input.display()))?;
+    let rows = parse_mot(BufReader::new(file))
+        .with_context(|| format!("{} is not a valid MOTChallenge file", input.display()))?;
+    if rows.is_empty() {
+        bail!("{} holds no detections", input.display());
+    }
+    let settings: TrackConfig = match config {
+        Some(path) => {
+            let text = fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?;
+            toml::from_str(&text).with_context(|| format!("in {}", path.display()))?
+        }
+        None => TrackConfig::default(),
+    };
+    let model = match settings.model {
+        Some(m) => m,
+        None => default_model(&rows)?,
+    }
+    .check()?;
+    // Detections by frame, in file order within a frame; ids follow that order.
+    let mut by_frame: std::collections::BTreeMap<Frame, Vec<MotRow>> = Default::default();
+    for r in rows {
+        by_frame.entry(r.frame).or_default().push(r);
+    }
+    let detections: Vec<MotRow> = by_frame.values().flatten().copied().collect();
+    let first = by_frame.keys().next().copied().unwrap_or(0);
+    let (associations, problem): (Vec<(u64, Vec<MeasId>)>, Problem) = match tracker {
+        Tracker::Mcmcda => {
+            let mut online = OnlineTracker::new(model.clone(), first, settings.online, seed)?;
+            for (frame, dets) in &by_frame {
+                let points: Vec<Point2> = dets.iter().map(|d| d.bbox.centre()).collect();
+                online.push_scan(*frame, &points)?;
+            }
+            let result = online.finish()?;
+            (result.associations, result.problem)
+        }
+        Tracker::Gnn => {
+            let mut problem = Problem::empty(&model, first);
+            for (frame, dets) in &by_frame {
+                let points: Vec<Point2> = dets.iter().map(|d| d.bbox.centre()).collect();
+                problem.push_scan(*frame, &points)?;
+            }
+            let window = 0..=problem.n_scans() - 1;
+            let tracks = nearest_neighbour_tracks(&model, &problem, window, &settings.gnn)?;
+            (
+                tracks.into_iter().zip(0..).map(|(t, i)| (i, t)).collect(),
+                problem,
+            )
+        }
+    };
+    let mut tracks = Vec::with_capacity(associations.len());
+    for (label, meas) in &associations {
+        let smoothed = smoothed_tracks(&model, &problem, std::slice::from_ref(meas), label + 1)?;
+        let n = meas.len() as f64;
+        let width = meas
+            .iter()
+            .map(|&m| detections[m as usize].bbox.width)
+            .sum::<f64>()
+            / n;
+        let height = meas
+            .iter()
+            .map(|&m| detections[m as usize].bbox.height)
+            .sum::<f64>()
+            / n;
+        for t in smoothed.tracks() {
+            let points = t
+                .points()
+                .iter()
+                .map(|p| {
+                    Ok(TrackPoint::boxed(
+                        p.frame,
+                        BoundingBox::from_centre(p.location.position(), width, height)?,
+                    ))
+                })
+                .collect::<Result<Vec<_>>>()?;
+            tracks.push(Track::from_points(t.id(), points)?);
+        }
+    }
+    let set = TrackSet::from_tracks(tracks)?;
+    let text = format_mot(&set.to_mot_rows(0.0));
+    fs::write(out, text).with_context(|| format!("cannot write {}", out.display()))?;
+    println!(
+        "{} tracks ({} boxes) from {} detections in {} frames written to {}",
+        set.len(),
+        set.n_points(),
+        detections.len(),
+        by_frame.len(),
+        out.display()
+    );
+    Ok(true)
+}
