@@ -409,3 +409,141 @@ fn exact_jpda_of_one_target_is_the_pda_closed_form() {
         assert!((b - wj / z).abs() < 1e-12);
     }
 }
+
+/// Three well-separated targets moving in straight lines, every one detected except where
+/// `missed` says, and no clutter.
+fn three_walkers(n_scans: u32, missed: &[(u32, usize)]) -> Vec<Scan> {
+    (0..n_scans)
+        .map(|f| {
+            let t = f64::from(f);
+            let points: Vec<(f64, f64)> = [(100.0, 100.0), (500.0, 600.0), (800.0, 200.0)]
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| !missed.contains(&(f, *i)))
+                .map(|(i, &(x, y))| (x + 20.0 * t, y + (i as f64 - 1.0) * 15.0 * t))
+                .collect();
+            scan(f, &points)
+        })
+        .collect()
+}
+
+#[test]
+fn gnn_and_the_chain_recover_separated_targets() {
+    use crate::{NearestNeighbourConfig, greedy_initial_partition, nearest_neighbour_tracks};
+    let scans = three_walkers(8, &[(3, 1), (4, 1), (6, 2)]);
+    let model = McmcdaConfig::default().check().unwrap();
+    let problem = Problem::from_scans(&model, &scans).unwrap();
+    let window = 0..=problem.n_scans() - 1;
+    // The true partition by construction: each walker's measurements in scan order.
+    let mut truth: Vec<Vec<u32>> = vec![Vec::new(); 3];
+    let mut id = 0;
+    for (f, s) in scans.iter().enumerate() {
+        let present: Vec<usize> = (0..3)
+            .filter(|i| ![(3, 1), (4, 1), (6, 2)].contains(&(f as u32, *i)))
+            .collect();
+        for (&walker, _) in present.iter().zip(&s.measurements) {
+            truth[walker].push(id);
+            id += 1;
+        }
+    }
+    truth.sort();
+    let gnn = nearest_neighbour_tracks(
+        &model,
+        &problem,
+        window.clone(),
+        &NearestNeighbourConfig::default(),
+    )
+    .unwrap();
+    assert_eq!(gnn, truth);
+    let start = greedy_initial_partition(&model, &problem, window.clone()).unwrap();
+    assert_eq!(start.canonical(), truth);
+    // From nothing, the chain finds the same partition.
+    let empty = Partition::empty(&model, &problem, window).unwrap();
+    let run = run_chains(&empty, 2, 20_000, 1).unwrap();
+    assert_eq!(run.tracks, truth);
+}
+
+#[test]
+fn online_tracker_keeps_labels_and_takes_late_measurements() {
+    use crate::{OnlineConfig, OnlineTracker};
+    let scans = three_walkers(30, &[(10, 0), (11, 2), (20, 1)]);
+    let model = McmcdaConfig::default().check().unwrap();
+    let config = OnlineConfig {
+        window: 6,
+        samples_per_scan: 500,
+        ..OnlineConfig::default()
+    };
+    let mut tracker = OnlineTracker::new(model, 0, config, 5).unwrap();
+    // Walker 1's measurement of frame 20 arrives one scan late.
+    let late = Vector2::new(500.0 + 400.0, 600.0);
+    for s in &scans {
+        let points: Vec<Vector2<f64>> = s.measurements.iter().map(|m| m.value).collect();
+        let step = tracker.push_scan(s.frame, &points).unwrap();
+        if s.frame >= 3 {
+            assert_eq!(step.estimates.len(), 3, "frame {}", s.frame);
+        }
+        if s.frame == 21 {
+            tracker.add_late(20, late).unwrap();
+        }
+    }
+    // Too late: frame 5 left the window long ago.
+    let err = tracker.add_late(5, late).unwrap_err().to_string();
+    assert!(err.contains("left the window"), "{err}");
+    let result = tracker.finish().unwrap();
+    assert_eq!(result.tracks.len(), 3, "one label per walker");
+    let mut lengths: Vec<usize> = result.associations.iter().map(|(_, t)| t.len()).collect();
+    lengths.sort_unstable();
+    // Each walker has 30 scans minus its misses; the late measurement filled walker 1's.
+    assert_eq!(lengths, vec![29, 29, 30]);
+    for (_, track) in &result.associations {
+        let xs: Vec<f64> = track.iter().map(|&m| result.problem.position(m).x).collect();
+        // One walker per label: x grows by 20 per scan along every track.
+        for (pair, ids) in xs.windows(2).zip(track.windows(2)) {
+            let gap = (result.problem.scan_of(ids[1]) - result.problem.scan_of(ids[0])) as f64;
+            assert!((pair[1] - pair[0] - 20.0 * gap).abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn bad_input_gives_errors_not_panics() {
+    let model = McmcdaConfig::default().check().unwrap();
+    let nan = scan(0, &[(f64::NAN, 1.0)]);
+    assert!(Problem::from_scans(&model, &[nan]).is_err());
+    let unordered = [scan(3, &[(1.0, 1.0)]), scan(1, &[(1.0, 1.0)])];
+    assert!(
+        Problem::from_scans(&model, &unordered)
+            .unwrap_err()
+            .to_string()
+            .contains("arrives after")
+    );
+    for bad in [
+        McmcdaConfig {
+            p_detect: 1.0,
+            ..McmcdaConfig::default()
+        },
+        McmcdaConfig {
+            clutter_per_scan: 0.0,
+            ..McmcdaConfig::default()
+        },
+        McmcdaConfig {
+            max_gap: 0,
+            ..McmcdaConfig::default()
+        },
+        McmcdaConfig {
+            measurement_noise: Matrix2::new(1.0, 2.0, 2.0, 1.0),
+            ..McmcdaConfig::default()
+        },
+        McmcdaConfig {
+            head_probability: 1.5,
+            ..McmcdaConfig::default()
+        },
+    ] {
+        assert!(bad.check().is_err(), "{bad:?} accepted");
+    }
+    let problem = Problem::from_scans(&model, &[scan(0, &[(1.0, 1.0)])]).unwrap();
+    assert!(Partition::empty(&model, &problem, 0..=3).is_err());
+    // A single-scan problem: nothing can be a track, and the chain just stays empty.
+    let start = Partition::empty(&model, &problem, 0..=0).unwrap();
+    assert!(run_chains(&start, 1, 100, 0).unwrap().tracks.is_empty());
+}
