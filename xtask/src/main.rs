@@ -59,8 +59,8 @@ enum Command {
         /// Where to write the tracks.
         #[arg(long)]
         out: PathBuf,
-        /// TOML with optional [model] (mcmcda::McmcdaConfig), [online] and [gnn] tables;
-        /// without it the model is scaled to the median box width.
+        /// TOML with optional `[model]` (fields of `mcmcda::McmcdaConfig`, overriding a model
+        /// scaled to the median box width), `[online]` and `[gnn]` tables.
         #[arg(long)]
         config: Option<PathBuf>,
         /// Seed of the MCMC generator.

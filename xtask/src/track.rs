@@ -22,7 +22,8 @@ use tracker_model::{
 use crate::Outcome;
 
 /// Which tracker `track` runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Tracker {
     /// Online sliding-window MCMCDA.
     Mcmcda,
@@ -30,11 +31,12 @@ pub enum Tracker {
     Gnn,
 }
 
-/// The optional `--config` TOML: any of the three tables, each field optional.
+/// The optional `--config` TOML: any of the three tables, each field optional. Fields of
+/// `[model]` override the model scaled to the detections.
 #[derive(Debug, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct TrackConfig {
-    model: Option<McmcdaConfig>,
+pub(crate) struct TrackConfig {
+    model: Option<toml::Table>,
     #[serde(default)]
     online: OnlineConfig,
     #[serde(default)]
@@ -76,47 +78,63 @@ fn default_model(rows: &[MotRow]) -> Result<McmcdaConfig> {
     })
 }
 
-/// Runs the command.
-#[expect(clippy::print_stdout, reason = "a one-line summary on the terminal")]
-pub fn run(
-    tracker: Tracker,
-    input: &Path,
-    out: &Path,
-    config: Option<&Path>,
-    seed: u64,
-) -> Outcome {
+/// Reads MOTChallenge detections; errors name the file and line.
+pub(crate) fn read_detections(input: &Path) -> Result<Vec<MotRow>> {
     let file = fs::File::open(input).with_context(|| format!("cannot open {}", input.display()))?;
     let rows = parse_mot(BufReader::new(file))
         .with_context(|| format!("{} is not a valid MOTChallenge file", input.display()))?;
     if rows.is_empty() {
         bail!("{} holds no detections", input.display());
     }
-    let settings: TrackConfig = match config {
+    Ok(rows)
+}
+
+/// Reads the optional configuration file.
+fn read_config(config: Option<&Path>) -> Result<TrackConfig> {
+    match config {
         Some(path) => {
             let text = fs::read_to_string(path)
                 .with_context(|| format!("cannot read {}", path.display()))?;
-            toml::from_str(&text).with_context(|| format!("in {}", path.display()))?
+            toml::from_str(&text).with_context(|| format!("in {}", path.display()))
         }
-        None => TrackConfig::default(),
-    };
-    let model = match settings.model {
-        Some(m) => m,
-        None => default_model(&rows)?,
+        None => Ok(TrackConfig::default()),
     }
-    .check()?;
+}
+
+/// Tracks `rows` (box centres as points) and returns boxed tracks with ids from 1: smoothed
+/// centres, each track's mean detection size.
+pub(crate) fn track_detections(
+    tracker: Tracker,
+    rows: &[MotRow],
+    settings: &TrackConfig,
+    seed: u64,
+) -> Result<TrackSet> {
+    let mut model = default_model(rows)?;
+    if let Some(overrides) = &settings.model {
+        let mut table = toml::Table::try_from(&model)?;
+        table.extend(overrides.clone());
+        model = table
+            .try_into()
+            .context("in the [model] table of the configuration")?;
+    }
+    let model = model.check()?;
     // Detections by frame, in file order within a frame; ids follow that order.
     let mut by_frame: std::collections::BTreeMap<Frame, Vec<MotRow>> = Default::default();
     for r in rows {
-        by_frame.entry(r.frame).or_default().push(r);
+        by_frame.entry(r.frame).or_default().push(*r);
     }
     let detections: Vec<MotRow> = by_frame.values().flatten().copied().collect();
     let first = by_frame.keys().next().copied().unwrap_or(0);
+    let centres = |dets: &[MotRow]| {
+        dets.iter()
+            .map(|d| d.bbox.centre())
+            .collect::<Vec<Point2>>()
+    };
     let (associations, problem): (Vec<(u64, Vec<MeasId>)>, Problem) = match tracker {
         Tracker::Mcmcda => {
             let mut online = OnlineTracker::new(model.clone(), first, settings.online, seed)?;
             for (frame, dets) in &by_frame {
-                let points: Vec<Point2> = dets.iter().map(|d| d.bbox.centre()).collect();
-                online.push_scan(*frame, &points)?;
+                online.push_scan(*frame, &centres(dets))?;
             }
             let result = online.finish()?;
             (result.associations, result.problem)
@@ -124,8 +142,7 @@ pub fn run(
         Tracker::Gnn => {
             let mut problem = Problem::empty(&model, first);
             for (frame, dets) in &by_frame {
-                let points: Vec<Point2> = dets.iter().map(|d| d.bbox.centre()).collect();
-                problem.push_scan(*frame, &points)?;
+                problem.push_scan(*frame, &centres(dets))?;
             }
             let window = 0..=problem.n_scans() - 1;
             let tracks = nearest_neighbour_tracks(&model, &problem, window, &settings.gnn)?;
@@ -163,15 +180,27 @@ pub fn run(
             tracks.push(Track::from_points(t.id(), points)?);
         }
     }
-    let set = TrackSet::from_tracks(tracks)?;
-    let text = format_mot(&set.to_mot_rows(0.0));
-    fs::write(out, text).with_context(|| format!("cannot write {}", out.display()))?;
+    Ok(TrackSet::from_tracks(tracks)?)
+}
+
+/// Runs the command.
+#[expect(clippy::print_stdout, reason = "a one-line summary on the terminal")]
+pub fn run(
+    tracker: Tracker,
+    input: &Path,
+    out: &Path,
+    config: Option<&Path>,
+    seed: u64,
+) -> Outcome {
+    let rows = read_detections(input)?;
+    let set = track_detections(tracker, &rows, &read_config(config)?, seed)?;
+    fs::write(out, format_mot(&set.to_mot_rows(0.0)))
+        .with_context(|| format!("cannot write {}", out.display()))?;
     println!(
-        "{} tracks ({} boxes) from {} detections in {} frames written to {}",
+        "{} tracks ({} boxes) from {} detections written to {}",
         set.len(),
         set.n_points(),
-        detections.len(),
-        by_frame.len(),
+        rows.len(),
         out.display()
     );
     Ok(true)

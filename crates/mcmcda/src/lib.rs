@@ -15,7 +15,7 @@
 //!   filter [`greedy_initial_partition`] that starts the chain);
 //! * [`smoothed_tracks`], [`measurement_labels`], [`tracks_by_origin`]: from partitions to
 //!   trajectories and scores;
-//! * [`reference`]: the log posterior from per-scan counts and partition enumeration.
+//! * [`mod@reference`]: the log posterior from per-scan counts and partition enumeration.
 //!
 //! ```
 //! use mcmcda::{McmcdaConfig, Partition, Problem, run_chains};

@@ -46,9 +46,9 @@ impl Default for SingleScanConfig {
 /// Association probabilities and updated states.
 #[derive(Debug, Clone, PartialEq)]
 pub struct JpdaResult {
-    /// β[k][j]: probability that measurement j came from target k.
+    /// `beta[k][j]`: probability that measurement j came from target k.
     pub beta: Vec<Vec<f64>>,
-    /// β[k] of "target k was not detected": 1 − Σ_j β[k][j].
+    /// `beta_missed[k]`: probability that target k was not detected, 1 − Σ_j `beta[k][j]`.
     pub beta_missed: Vec<f64>,
     /// The JPDA posterior of each target (mean mixture, with the spread of innovations).
     pub states: Vec<Gaussian<4>>,

@@ -496,7 +496,10 @@ fn online_tracker_keeps_labels_and_takes_late_measurements() {
     // Each walker has 30 scans minus its misses; the late measurement filled walker 1's.
     assert_eq!(lengths, vec![29, 29, 30]);
     for (_, track) in &result.associations {
-        let xs: Vec<f64> = track.iter().map(|&m| result.problem.position(m).x).collect();
+        let xs: Vec<f64> = track
+            .iter()
+            .map(|&m| result.problem.position(m).x)
+            .collect();
         // One walker per label: x grows by 20 per scan along every track.
         for (pair, ids) in xs.windows(2).zip(track.windows(2)) {
             let gap = (result.problem.scan_of(ids[1]) - result.problem.scan_of(ids[0])) as f64;

@@ -11,6 +11,7 @@ mod hmm;
 mod kalman;
 mod mcmcda;
 mod mot_eval;
+mod mot_track;
 mod simulator;
 
 /// A pipeline: scenario in, metrics and report section out; ticks `progress` as it goes.
@@ -25,6 +26,7 @@ const PIPELINES: &[(&str, PipelineFn)] = &[
     ("mcmcda-online", mcmcda::online),
     ("mcmcda-sweep", mcmcda::sweep),
     ("mot-eval", mot_eval::run),
+    ("mot-track", mot_track::run),
     ("simulator-poisson", simulator::run),
 ];
 
