@@ -16,12 +16,15 @@
 //!   [`TrackSet`] output type that every tracker returns and every metric reads.
 //! * The MCMCDA scenario [`SimulationConfig`] → [`Simulator`] (Oh, Russell & Sastry, TAC 2009).
 //! * MOTChallenge rows: [`parse_mot`], [`format_mot`], conversions to and from [`TrackSet`].
+//! * [`LocalDetector`] / [`LocalDetectorFactory`]: the interface of per-object detectors
+//!   trained online, shared by trackers (phd-filter) and detectors (sensors-video).
 //!
 //! Invariants: a [`Gaussian`] always has a finite mean and a symmetric positive-definite
 //! covariance; a failed factorisation is an [`Error`], never a panic; randomness comes only from
 //! the generator the caller passes in.
 
 mod consistency;
+mod detector;
 mod error;
 mod gaussian;
 mod geometry;
@@ -36,6 +39,7 @@ mod track;
 mod tests;
 
 pub use consistency::{anees_interval_95, chi_square_quantile_wh};
+pub use detector::{LocalDetector, LocalDetectorFactory};
 pub use error::{Error, Result};
 pub use gaussian::{
     CholeskyFactor, Gaussian, LN_2PI, check_finite_matrix, check_positive_semidefinite,

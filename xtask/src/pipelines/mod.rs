@@ -12,6 +12,7 @@ mod kalman;
 mod mcmcda;
 mod mot_eval;
 mod mot_track;
+mod phd;
 mod simulator;
 
 /// A pipeline: scenario in, metrics and report section out; ticks `progress` as it goes.
@@ -27,6 +28,7 @@ const PIPELINES: &[(&str, PipelineFn)] = &[
     ("mcmcda-sweep", mcmcda::sweep),
     ("mot-eval", mot_eval::run),
     ("mot-track", mot_track::run),
+    ("phd-pedestrians", phd::run),
     ("simulator-poisson", simulator::run),
 ];
 

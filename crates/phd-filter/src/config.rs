@@ -1,0 +1,220 @@
+//! Parameters shared by the SMC-PHD and GM-PHD filters over bounding boxes.
+//!
+//! A target's state is x = [c_x, c_y, w, h, v_x, v_y] (box centre, size, centre velocity); a
+//! measurement is a box z = [c_x, c_y, w, h].
+
+use serde::{Deserialize, Serialize};
+use tracker_model::BoundingBox;
+
+use crate::error::{Error, Result};
+
+/// Box state [c_x, c_y, w, h, v_x, v_y].
+pub type BoxState = [f64; 6];
+/// Box measurement [c_x, c_y, w, h].
+pub type BoxMeasurement = [f64; 4];
+
+/// How boxes move between frames.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Motion {
+    /// Random walk of centre and size (the seed's model); velocities stay 0.
+    RandomWalk {
+        /// Standard deviation of the centre's step per frame (pixels).
+        position_std: f64,
+        /// Standard deviation of the size's step per frame (pixels).
+        size_std: f64,
+    },
+    /// Nearly constant velocity of the centre (white acceleration), random walk of the size.
+    ConstantVelocity {
+        /// Standard deviation of the velocity's change per frame (pixels/frame).
+        acceleration_std: f64,
+        /// Standard deviation of the size's step per frame (pixels).
+        size_std: f64,
+    },
+}
+
+/// Parameters of the PHD filters. Defaults follow seed 004 where it gives values (p_D = 0.95,
+/// birth intensity 0.1, extraction threshold 0.5) and are otherwise sized for pedestrians of
+/// 50-150 pixels in a 640 × 480 image.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PhdConfig {
+    /// Survival probability p_S.
+    pub p_survive: f64,
+    /// Detection probability p_D.
+    pub p_detect: f64,
+    /// Expected false detections per frame, λ_c.
+    pub clutter_rate: f64,
+    /// Volume of measurement space (image area × range of widths × range of heights) over
+    /// which clutter is uniform: κ(z) = λ_c / volume.
+    pub measurement_volume: f64,
+    /// Expected births per frame ν_b, spread evenly over the frame's measurements.
+    pub birth_rate: f64,
+    /// Standard deviations of the measurement noise of [c_x, c_y, w, h] (eq. 7's Σ, diagonal).
+    pub measurement_std: [f64; 4],
+    /// Motion model.
+    pub motion: Motion,
+    /// Standard deviation of a newborn's velocity per axis (constant-velocity model only).
+    pub birth_velocity_std: f64,
+    /// SMC: particles per expected target (ρ).
+    pub particles_per_target: usize,
+    /// SMC: particles drawn for each measurement's newborn group (J_b).
+    pub birth_particles: usize,
+    /// SMC: the most persistent particles after resampling.
+    pub max_particles: usize,
+    /// An estimate is reported for a measurement whose persistent weight W(z) exceeds this
+    /// (grouping extraction, eq. 8; GM-PHD: a component's weight).
+    pub extraction_threshold: f64,
+    /// SMC: an estimate takes the oldest identity that carries at least this share of its
+    /// W(z), so a target re-born after a missed detection keeps its identity.
+    pub label_min_share: f64,
+}
+
+impl Default for PhdConfig {
+    fn default() -> Self {
+        Self {
+            p_survive: 0.99,
+            p_detect: 0.95,
+            clutter_rate: 1.0,
+            measurement_volume: 640.0 * 480.0 * 100.0 * 200.0,
+            birth_rate: 0.1,
+            measurement_std: [4.0, 4.0, 3.0, 6.0],
+            motion: Motion::RandomWalk {
+                position_std: 4.0,
+                size_std: 1.0,
+            },
+            birth_velocity_std: 2.0,
+            particles_per_target: 1000,
+            birth_particles: 200,
+            max_particles: 100_000,
+            extraction_threshold: 0.5,
+            label_min_share: 0.05,
+        }
+    }
+}
+
+fn positive(v: f64, name: &str) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::Invalid(format!(
+            "{name} is {v}; it must be finite and > 0"
+        )))
+    }
+}
+
+fn probability(v: f64, name: &str) -> Result<()> {
+    if v.is_finite() && v > 0.0 && v < 1.0 {
+        Ok(())
+    } else {
+        Err(Error::Invalid(format!(
+            "{name} is {v}; it must lie in (0, 1)"
+        )))
+    }
+}
+
+impl PhdConfig {
+    /// Checks every field.
+    pub fn check(&self) -> Result<()> {
+        probability(self.p_survive, "p_survive")?;
+        probability(self.p_detect, "p_detect")?;
+        positive(self.clutter_rate, "clutter_rate")?;
+        positive(self.measurement_volume, "measurement_volume")?;
+        positive(self.birth_rate, "birth_rate")?;
+        for (i, s) in self.measurement_std.iter().enumerate() {
+            positive(*s, &format!("measurement_std[{i}]"))?;
+        }
+        match self.motion {
+            Motion::RandomWalk {
+                position_std,
+                size_std,
+            } => {
+                positive(position_std, "position_std")?;
+                positive(size_std, "size_std")?;
+            }
+            Motion::ConstantVelocity {
+                acceleration_std,
+                size_std,
+            } => {
+                positive(acceleration_std, "acceleration_std")?;
+                positive(size_std, "size_std")?;
+            }
+        }
+        positive(self.birth_velocity_std, "birth_velocity_std")?;
+        if self.particles_per_target == 0 || self.birth_particles == 0 || self.max_particles == 0 {
+            return Err(Error::Invalid("particle counts must be > 0".into()));
+        }
+        positive(self.extraction_threshold, "extraction_threshold")?;
+        if !(0.0..=1.0).contains(&self.label_min_share) {
+            return Err(Error::Invalid(format!(
+                "label_min_share is {}; it must lie in [0, 1]",
+                self.label_min_share
+            )));
+        }
+        Ok(())
+    }
+
+    /// κ(z): clutter intensity, uniform over measurement space.
+    pub fn clutter_intensity(&self) -> f64 {
+        self.clutter_rate / self.measurement_volume
+    }
+}
+
+/// A usable measurement from a box, or `None` for a degenerate one (non-finite coordinates,
+/// zero or negative size): such boxes are skipped and counted, never fed to the filter.
+pub fn measurement_from_box(b: &BoundingBox) -> Option<BoxMeasurement> {
+    let z = [
+        b.left + b.width / 2.0,
+        b.top + b.height / 2.0,
+        b.width,
+        b.height,
+    ];
+    (z.iter().all(|v| v.is_finite()) && b.width > 0.0 && b.height > 0.0).then_some(z)
+}
+
+/// The box of a state (size clamped to at least one pixel).
+pub fn state_box(x: &BoxState) -> BoundingBox {
+    let (w, h) = (x[2].max(1.0), x[3].max(1.0));
+    BoundingBox {
+        left: x[0] - w / 2.0,
+        top: x[1] - h / 2.0,
+        width: w,
+        height: h,
+    }
+}
+
+/// The diagonal Gaussian likelihood of eq. 7 for one measurement: precomputed constants.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Likelihood {
+    inv_var: [f64; 4],
+    log_norm: f64,
+    /// Squared Mahalanobis distance beyond which g is treated as 0 (e^-50/2 ≈ 1e-11 of the
+    /// peak: far below any weight that matters).
+    cutoff: f64,
+}
+
+impl Likelihood {
+    pub(crate) fn new(std: &[f64; 4]) -> Self {
+        let inv_var = std.map(|s| 1.0 / (s * s));
+        let log_det: f64 = std.iter().map(|s| 2.0 * s.ln()).sum();
+        Self {
+            inv_var,
+            log_norm: -2.0 * std::f64::consts::TAU.ln() - 0.5 * log_det,
+            cutoff: 50.0,
+        }
+    }
+
+    /// g(z | x): density of measuring `z` from state `x`.
+    #[inline]
+    pub(crate) fn density(&self, z: &BoxMeasurement, x: &BoxState) -> f64 {
+        let mut d2 = 0.0;
+        for k in 0..4 {
+            let e = z[k] - x[k];
+            d2 += e * e * self.inv_var[k];
+            if d2 > self.cutoff {
+                return 0.0;
+            }
+        }
+        (self.log_norm - 0.5 * d2).exp()
+    }
+}

@@ -1,0 +1,332 @@
+//! The Gaussian-mixture PHD filter (Vo & Ma, IEEE TSP 54(11), 2006) over boxes, with the same
+//! measurement-driven birth as the SMC filter so the two approximate the same recursion:
+//! prediction, the missed-detection and per-measurement components, pruning (w < 1e-5),
+//! merging (Mahalanobis distance ≤ U), capping at J_max, and extraction of every component of
+//! weight above the threshold. Components carry labels: a detection-updated component keeps
+//! its parent's, a merged one the heaviest member's.
+
+use nalgebra::{Cholesky, SMatrix, SVector};
+use serde::{Deserialize, Serialize};
+use tracker_model::BoundingBox;
+
+use crate::config::{Motion, PhdConfig, measurement_from_box, state_box};
+use crate::error::{Error, Result};
+use crate::smc::{Estimate, PhdStep};
+
+type Vec6 = SVector<f64, 6>;
+type Mat6 = SMatrix<f64, 6, 6>;
+type Mat4 = SMatrix<f64, 4, 4>;
+type Mat64 = SMatrix<f64, 6, 4>;
+
+/// Mixture management of the GM-PHD filter (Vo & Ma's values by default).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GmConfig {
+    /// Components lighter than this are dropped (T).
+    pub prune_below: f64,
+    /// Components within this squared Mahalanobis distance of the heaviest are merged (U).
+    pub merge_distance: f64,
+    /// At most this many components are kept (J_max).
+    pub max_components: usize,
+}
+
+impl Default for GmConfig {
+    fn default() -> Self {
+        Self {
+            prune_below: 1e-5,
+            merge_distance: 4.0,
+            max_components: 100,
+        }
+    }
+}
+
+/// One weighted Gaussian component.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Component {
+    /// Weight.
+    pub w: f64,
+    /// Mean state.
+    pub m: Vec6,
+    /// Covariance.
+    pub p: Mat6,
+    /// Identity.
+    pub label: u64,
+}
+
+/// The GM-PHD filter.
+#[derive(Debug, Clone)]
+pub struct GmPhd {
+    config: PhdConfig,
+    gm: GmConfig,
+    f: Mat6,
+    q: Mat6,
+    r: Mat4,
+    birth_cov: Mat6,
+    components: Vec<Component>,
+    next_label: u64,
+}
+
+const LN_2PI: f64 = 1.837_877_066_409_345_3;
+
+/// Per-component quantities of the update that do not depend on the measurement.
+struct Innovation {
+    factor: Cholesky<f64, nalgebra::Const<4>>,
+    log_norm: f64,
+    gain: Mat64,
+    cov: Mat6,
+}
+
+fn innovation(c: &Component, r: &Mat4) -> Result<Innovation> {
+    let hp: SMatrix<f64, 4, 6> = c.p.fixed_rows::<4>(0).into_owned();
+    let s: Mat4 = hp.fixed_columns::<4>(0).into_owned() + r;
+    let factor =
+        Cholesky::new(s).ok_or(Error::Model(tracker_model::Error::NotPositiveDefinite {
+            what: "GM-PHD innovation covariance",
+        }))?;
+    let log_det: f64 = factor.l().diagonal().iter().map(|d| 2.0 * d.ln()).sum();
+    // K = P Hᵀ S⁻¹ = (S⁻¹ H P)ᵀ.
+    let gain: Mat64 = factor.solve(&hp).transpose();
+    let cov = c.p - gain * hp;
+    Ok(Innovation {
+        factor,
+        log_norm: -2.0 * LN_2PI - 0.5 * log_det,
+        gain,
+        cov: (cov + cov.transpose()) * 0.5,
+    })
+}
+
+impl GmPhd {
+    /// A filter with no targets.
+    pub fn new(config: PhdConfig, gm: GmConfig) -> Result<Self> {
+        config.check()?;
+        if !(gm.prune_below >= 0.0 && gm.merge_distance >= 0.0 && gm.max_components > 0) {
+            return Err(Error::Invalid(format!("bad mixture settings {gm:?}")));
+        }
+        let mut f = Mat6::identity();
+        let mut q = Mat6::zeros();
+        let mut birth_cov = Mat6::zeros();
+        for k in 0..4 {
+            birth_cov[(k, k)] = config.measurement_std[k].powi(2);
+        }
+        match config.motion {
+            Motion::RandomWalk {
+                position_std,
+                size_std,
+            } => {
+                q[(0, 0)] = position_std.powi(2);
+                q[(1, 1)] = position_std.powi(2);
+                q[(2, 2)] = size_std.powi(2);
+                q[(3, 3)] = size_std.powi(2);
+                // Velocities are not used; a unit variance keeps P invertible for merging.
+                birth_cov[(4, 4)] = 1.0;
+                birth_cov[(5, 5)] = 1.0;
+            }
+            Motion::ConstantVelocity {
+                acceleration_std,
+                size_std,
+            } => {
+                f[(0, 4)] = 1.0;
+                f[(1, 5)] = 1.0;
+                q[(2, 2)] = size_std.powi(2);
+                q[(3, 3)] = size_std.powi(2);
+                q[(4, 4)] = acceleration_std.powi(2);
+                q[(5, 5)] = acceleration_std.powi(2);
+                birth_cov[(4, 4)] = config.birth_velocity_std.powi(2);
+                birth_cov[(5, 5)] = config.birth_velocity_std.powi(2);
+            }
+        }
+        Ok(Self {
+            r: Mat4::from_diagonal(&SVector::<f64, 4>::from(
+                config.measurement_std.map(|s| s * s),
+            )),
+            config,
+            gm,
+            f,
+            q,
+            birth_cov,
+            components: Vec::new(),
+            next_label: 0,
+        })
+    }
+
+    /// The mixture after the last frame.
+    pub fn components(&self) -> &[Component] {
+        &self.components
+    }
+
+    /// Runs one frame with the given detections.
+    pub fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        let zs: Vec<(usize, SVector<f64, 4>)> = boxes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| measurement_from_box(b).map(|z| (i, SVector::from(z))))
+            .collect();
+        let skipped = boxes.len() - zs.len();
+        let cfg = self.config;
+        let p_d = cfg.p_detect;
+        // Predict.
+        for c in &mut self.components {
+            c.w *= cfg.p_survive;
+            c.m = self.f * c.m;
+            c.p = self.f * c.p * self.f.transpose() + self.q;
+        }
+        let innovations = self
+            .components
+            .iter()
+            .map(|c| innovation(c, &self.r))
+            .collect::<Result<Vec<_>>>()?;
+        let nu = if zs.is_empty() {
+            0.0
+        } else {
+            cfg.birth_rate / zs.len() as f64
+        };
+        let kappa = cfg.clutter_intensity();
+        // Newborns: one component per measurement, at the measurement.
+        let newborn: Vec<Component> = zs
+            .iter()
+            .enumerate()
+            .map(|(j, (_, z))| {
+                let mut m = Vec6::zeros();
+                m.fixed_rows_mut::<4>(0).copy_from(z);
+                Component {
+                    w: nu,
+                    m,
+                    p: self.birth_cov,
+                    label: self.next_label + j as u64,
+                }
+            })
+            .collect();
+        self.next_label += zs.len() as u64;
+        let newborn_innovations = newborn
+            .iter()
+            .map(|c| innovation(c, &self.r))
+            .collect::<Result<Vec<_>>>()?;
+        // log N(z; H m, S) for every (component, measurement) pair.
+        let log_density = |c: &Component, inn: &Innovation, z: &SVector<f64, 4>| {
+            let residual = z - c.m.fixed_rows::<4>(0);
+            let maha = residual.dot(&inn.factor.solve(&residual));
+            (inn.log_norm - 0.5 * maha, residual)
+        };
+        let mut detected: Vec<Component> = Vec::new();
+        let mut updated_newborn: Vec<Component> = Vec::with_capacity(newborn.len());
+        let mut per_z: Vec<Vec<(usize, f64, SVector<f64, 4>)>> = vec![Vec::new(); zs.len()];
+        for (j, (_, z)) in zs.iter().enumerate() {
+            for (i, (c, inn)) in self.components.iter().zip(&innovations).enumerate() {
+                let (ld, residual) = log_density(c, inn, z);
+                let q = p_d * c.w * ld.exp();
+                if q > 0.0 {
+                    per_z[j].push((i, q, residual));
+                }
+            }
+        }
+        for (j, (_, z)) in zs.iter().enumerate() {
+            let (nb_ld, nb_residual) = log_density(&newborn[j], &newborn_innovations[j], z);
+            let birth_term = nu * nb_ld.exp();
+            let l = kappa + birth_term + per_z[j].iter().map(|t| t.1).sum::<f64>();
+            for (i, q, residual) in &per_z[j] {
+                let c = &self.components[*i];
+                let inn = &innovations[*i];
+                detected.push(Component {
+                    w: q / l,
+                    m: c.m + inn.gain * residual,
+                    p: inn.cov,
+                    label: c.label,
+                });
+            }
+            let inn = &newborn_innovations[j];
+            updated_newborn.push(Component {
+                w: birth_term / l,
+                m: newborn[j].m + inn.gain * nb_residual,
+                p: inn.cov,
+                label: newborn[j].label,
+            });
+        }
+        for c in &mut self.components {
+            c.w *= 1.0 - p_d;
+        }
+        self.components.extend(detected);
+        let expected_targets: f64 = self.components.iter().map(|c| c.w).sum();
+        self.reduce()?;
+        // Extraction, heaviest first; a label already used goes to a new identity.
+        let mut order: Vec<usize> = (0..self.components.len())
+            .filter(|&i| self.components[i].w > cfg.extraction_threshold)
+            .collect();
+        order.sort_by(|&a, &b| {
+            self.components[b]
+                .w
+                .total_cmp(&self.components[a].w)
+                .then(a.cmp(&b))
+        });
+        let mut used: Vec<u64> = Vec::new();
+        let mut estimates = Vec::with_capacity(order.len());
+        for i in order {
+            if used.contains(&self.components[i].label) {
+                self.components[i].label = self.next_label;
+                self.next_label += 1;
+            }
+            let c = &self.components[i];
+            used.push(c.label);
+            let state: [f64; 6] = c.m.into();
+            estimates.push(Estimate {
+                label: c.label,
+                state,
+                bbox: state_box(&state),
+                weight: c.w,
+                measurement: None,
+            });
+        }
+        self.components.extend(updated_newborn);
+        self.reduce()?;
+        Ok(PhdStep {
+            estimates,
+            expected_targets,
+            skipped,
+        })
+    }
+
+    /// Pruning, merging and capping.
+    fn reduce(&mut self) -> Result<()> {
+        let mut rest: Vec<Component> = self
+            .components
+            .drain(..)
+            .filter(|c| c.w > self.gm.prune_below && c.w.is_finite())
+            .collect();
+        let mut merged = Vec::new();
+        while !rest.is_empty() {
+            let (heaviest, _) =
+                rest.iter()
+                    .enumerate()
+                    .fold((0, f64::NEG_INFINITY), |best, (i, c)| {
+                        if c.w > best.1 { (i, c.w) } else { best }
+                    });
+            let anchor = rest[heaviest];
+            let factor = Cholesky::new(anchor.p).ok_or(Error::Model(
+                tracker_model::Error::NotPositiveDefinite {
+                    what: "GM-PHD component covariance",
+                },
+            ))?;
+            let (close, far): (Vec<Component>, Vec<Component>) = rest.into_iter().partition(|c| {
+                let d = c.m - anchor.m;
+                d.dot(&factor.solve(&d)) <= self.gm.merge_distance
+            });
+            let w: f64 = close.iter().map(|c| c.w).sum();
+            let m: Vec6 = close.iter().map(|c| c.m * c.w).sum::<Vec6>() / w;
+            let p: Mat6 = close
+                .iter()
+                .map(|c| (c.p + (m - c.m) * (m - c.m).transpose()) * c.w)
+                .sum::<Mat6>()
+                / w;
+            merged.push(Component {
+                w,
+                m,
+                p: (p + p.transpose()) * 0.5,
+                label: anchor.label,
+            });
+            rest = far;
+        }
+        merged.sort_by(|a, b| b.w.total_cmp(&a.w));
+        merged.truncate(self.gm.max_components);
+        self.components = merged;
+        Ok(())
+    }
+}

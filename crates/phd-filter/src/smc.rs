@@ -1,0 +1,366 @@
+//! The SMC-PHD filter (Vo, Singh & Doucet 2005; seed 004 eqs. 3-8) with measurement-driven
+//! birth and grouping extraction (Ristic, Clark, Vo & Vo 2012).
+//!
+//! Persistent particles are predicted, weighted by survival, and updated with
+//! w ← [1 − p_D + Σ_z p_D g(z|x) / L(z)] w, where L(z) = κ(z) + ν_b(z) ḡ_b(z) + Σ_i p_D g(z|x_i) w_i.
+//! Each measurement z also spawns J_b newborn particles around it, with total weight ν_b(z)
+//! (ν_b spread evenly over the frame's measurements), updated only by their own z (a newborn
+//! is born detected). A measurement whose persistent weight W(z) = Σ_i p_D g(z|x_i) w_i / L(z)
+//! exceeds the threshold yields an estimate, the W-weighted mean of the particles (eq. 8); its
+//! identity is the label carrying most of that weight. Every particle keeps the label of the
+//! newborn group it came from, so identities persist across frames and through resampling.
+//!
+//! Particle work runs on rayon in fixed chunks, each with its own generator stream, and sums are
+//! reduced in chunk order: results depend on the seed only, not on the thread count.
+
+use std::collections::BTreeMap;
+
+use rand::{Rng, RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
+use tracker_model::BoundingBox;
+
+use crate::config::{
+    BoxMeasurement, BoxState, Likelihood, Motion, PhdConfig, measurement_from_box, state_box,
+};
+use crate::error::Result;
+
+/// Particles per parallel work item (and per generator stream).
+const CHUNK: usize = 2048;
+
+/// One weighted particle.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Particle {
+    /// Box state.
+    pub x: BoxState,
+    /// PHD weight.
+    pub w: f64,
+    /// Identity of the newborn group it descends from.
+    pub label: u64,
+}
+
+/// A reported target.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Estimate {
+    /// Persistent identity.
+    pub label: u64,
+    /// The estimated state.
+    pub state: BoxState,
+    /// Its box.
+    pub bbox: BoundingBox,
+    /// W(z) (SMC) or the component weight (GM): the estimate's existence mass.
+    pub weight: f64,
+    /// Index of the measurement it was extracted from, in the input slice (GM-PHD: none).
+    pub measurement: Option<usize>,
+}
+
+/// The outcome of one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhdStep {
+    /// Reported targets.
+    pub estimates: Vec<Estimate>,
+    /// N̂: the expected number of (persistent) targets after the update.
+    pub expected_targets: f64,
+    /// Input boxes skipped as degenerate (non-finite, zero or negative size).
+    pub skipped: usize,
+}
+
+/// The SMC-PHD filter.
+#[derive(Debug, Clone)]
+pub struct SmcPhd {
+    config: PhdConfig,
+    likelihood: Likelihood,
+    particles: Vec<Particle>,
+    next_label: u64,
+    rng: ChaCha8Rng,
+}
+
+fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
+    StandardNormal.sample(rng)
+}
+
+/// Moves a particle one frame.
+fn propagate<R: Rng + ?Sized>(x: &mut BoxState, motion: &Motion, rng: &mut R) {
+    match *motion {
+        Motion::RandomWalk {
+            position_std,
+            size_std,
+        } => {
+            x[0] += position_std * normal(rng);
+            x[1] += position_std * normal(rng);
+            x[2] = (x[2] + size_std * normal(rng)).max(1.0);
+            x[3] = (x[3] + size_std * normal(rng)).max(1.0);
+        }
+        Motion::ConstantVelocity {
+            acceleration_std,
+            size_std,
+        } => {
+            x[0] += x[4];
+            x[1] += x[5];
+            x[4] += acceleration_std * normal(rng);
+            x[5] += acceleration_std * normal(rng);
+            x[2] = (x[2] + size_std * normal(rng)).max(1.0);
+            x[3] = (x[3] + size_std * normal(rng)).max(1.0);
+        }
+    }
+}
+
+/// The generator of work item `stream` of a frame.
+fn stream_rng(seed: u64, stream: usize) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(stream as u64);
+    rng
+}
+
+/// Per-measurement sums of one chunk of persistent particles.
+#[derive(Clone, Default)]
+struct Grouping {
+    /// Σ p_D g w / L and Σ (p_D g w / L) x, per measurement.
+    mass: Vec<f64>,
+    mean: Vec<BoxState>,
+    /// Mass per label, per measurement.
+    labels: Vec<BTreeMap<u64, f64>>,
+}
+
+impl SmcPhd {
+    /// A filter with no targets; every random draw comes from ChaCha8 seeded with `seed`.
+    pub fn new(config: PhdConfig, seed: u64) -> Result<Self> {
+        config.check()?;
+        Ok(Self {
+            likelihood: Likelihood::new(&config.measurement_std),
+            config,
+            particles: Vec::new(),
+            next_label: 0,
+            rng: ChaCha8Rng::seed_from_u64(seed),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &PhdConfig {
+        &self.config
+    }
+
+    /// The persistent particles (after the last resampling).
+    pub fn particles(&self) -> &[Particle] {
+        &self.particles
+    }
+
+    /// Runs one frame with the given detections.
+    pub fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        let valid: Vec<(usize, BoxMeasurement)> = boxes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, b)| measurement_from_box(b).map(|z| (i, z)))
+            .collect();
+        let skipped = boxes.len() - valid.len();
+        let zs: Vec<BoxMeasurement> = valid.iter().map(|v| v.1).collect();
+        let cfg = self.config;
+        let lik = self.likelihood;
+        let p_d = cfg.p_detect;
+
+        // Predict.
+        let seed: u64 = self.rng.random();
+        self.particles
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(c, chunk)| {
+                let mut rng = stream_rng(seed, c);
+                for p in chunk {
+                    propagate(&mut p.x, &cfg.motion, &mut rng);
+                    p.w *= cfg.p_survive;
+                }
+            });
+
+        // Newborn groups, one per measurement, drawn around it.
+        let birth_seed: u64 = self.rng.random();
+        let nu = if zs.is_empty() {
+            0.0
+        } else {
+            cfg.birth_rate / zs.len() as f64
+        };
+        let first_label = self.next_label;
+        self.next_label += zs.len() as u64;
+        let newborn: Vec<Vec<Particle>> = zs
+            .par_iter()
+            .enumerate()
+            .map(|(j, z)| {
+                let mut rng = stream_rng(birth_seed, j);
+                (0..cfg.birth_particles)
+                    .map(|_| {
+                        let mut x = [0.0; 6];
+                        for k in 0..4 {
+                            x[k] = z[k] + cfg.measurement_std[k] * normal(&mut rng);
+                        }
+                        x[2] = x[2].max(1.0);
+                        x[3] = x[3].max(1.0);
+                        if let Motion::ConstantVelocity { .. } = cfg.motion {
+                            x[4] = cfg.birth_velocity_std * normal(&mut rng);
+                            x[5] = cfg.birth_velocity_std * normal(&mut rng);
+                        }
+                        Particle {
+                            x,
+                            w: nu / cfg.birth_particles as f64,
+                            label: first_label + j as u64,
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+
+        // L(z) = κ + ν_b(z) ḡ_b(z) + Σ_i p_D g(z|x_i) w_i.
+        let n_z = zs.len();
+        let persistent_sum: Vec<f64> = self
+            .particles
+            .par_chunks(CHUNK)
+            .map(|chunk| {
+                let mut sums = vec![0.0; n_z];
+                for p in chunk {
+                    for (s, z) in sums.iter_mut().zip(&zs) {
+                        *s += p_d * lik.density(z, &p.x) * p.w;
+                    }
+                }
+                sums
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
+            .fold(vec![0.0; n_z], |mut acc, s| {
+                acc.iter_mut().zip(s).for_each(|(a, b)| *a += b);
+                acc
+            });
+        let kappa = cfg.clutter_intensity();
+        let newborn_g: Vec<Vec<f64>> = newborn
+            .par_iter()
+            .zip(&zs)
+            .map(|(group, z)| group.iter().map(|p| lik.density(z, &p.x)).collect())
+            .collect();
+        let big_l: Vec<f64> = (0..n_z)
+            .map(|j| {
+                let mean_g = newborn_g[j].iter().sum::<f64>() / newborn_g[j].len().max(1) as f64;
+                kappa + nu * mean_g + persistent_sum[j]
+            })
+            .collect();
+
+        // Update persistent particles and accumulate the grouping sums.
+        let groups: Vec<Grouping> = self
+            .particles
+            .par_chunks_mut(CHUNK)
+            .map(|chunk| {
+                let mut g = Grouping {
+                    mass: vec![0.0; n_z],
+                    mean: vec![[0.0; 6]; n_z],
+                    labels: vec![BTreeMap::new(); n_z],
+                };
+                for p in chunk {
+                    let mut factor = 1.0 - p_d;
+                    for j in 0..n_z {
+                        let d = lik.density(&zs[j], &p.x);
+                        if d > 0.0 {
+                            let share = p_d * d / big_l[j];
+                            factor += share;
+                            let m = share * p.w;
+                            g.mass[j] += m;
+                            for k in 0..6 {
+                                g.mean[j][k] += m * p.x[k];
+                            }
+                            *g.labels[j].entry(p.label).or_default() += m;
+                        }
+                    }
+                    p.w *= factor;
+                }
+                g
+            })
+            .collect();
+        let expected_targets: f64 = self.particles.iter().map(|p| p.w).sum();
+
+        // Grouping extraction (eq. 8), larger W first so a contested label goes to it.
+        let mut total = Grouping {
+            mass: vec![0.0; n_z],
+            mean: vec![[0.0; 6]; n_z],
+            labels: vec![BTreeMap::new(); n_z],
+        };
+        for g in groups {
+            for j in 0..n_z {
+                total.mass[j] += g.mass[j];
+                for k in 0..6 {
+                    total.mean[j][k] += g.mean[j][k];
+                }
+                for (l, m) in &g.labels[j] {
+                    *total.labels[j].entry(*l).or_default() += m;
+                }
+            }
+        }
+        let mut order: Vec<usize> = (0..n_z)
+            .filter(|&j| total.mass[j] > cfg.extraction_threshold)
+            .collect();
+        order.sort_by(|&a, &b| total.mass[b].total_cmp(&total.mass[a]).then(a.cmp(&b)));
+        let mut used_labels: Vec<u64> = Vec::new();
+        let mut estimates = Vec::with_capacity(order.len());
+        for j in order {
+            let w = total.mass[j];
+            let state = total.mean[j].map(|v| v / w);
+            // The oldest label with a fair share of W(z): a target that faded after a missed
+            // detection and was re-born from the next one keeps its identity.
+            let share = cfg.label_min_share * w;
+            let label = total.labels[j]
+                .iter()
+                .filter(|(_, m)| **m >= share)
+                .map(|(l, _)| *l)
+                .find(|l| !used_labels.contains(l))
+                .unwrap_or_else(|| {
+                    self.next_label += 1;
+                    self.next_label - 1
+                });
+            used_labels.push(label);
+            estimates.push(Estimate {
+                label,
+                state,
+                bbox: state_box(&state),
+                weight: w,
+                measurement: Some(valid[j].0),
+            });
+        }
+
+        // Newborns: updated by their own measurement only, then join the persistent set.
+        for ((group, g), l) in newborn.into_iter().zip(&newborn_g).zip(&big_l) {
+            self.particles
+                .extend(group.into_iter().zip(g).map(|(mut p, d)| {
+                    p.w *= d / l;
+                    p
+                }));
+        }
+        self.resample();
+        Ok(PhdStep {
+            estimates,
+            expected_targets,
+            skipped,
+        })
+    }
+
+    /// Systematic resampling to ρ N̂ particles (at most `max_particles`), each of weight N̂/J.
+    fn resample(&mut self) {
+        let total: f64 = self.particles.iter().map(|p| p.w).sum();
+        if !(total.is_finite() && total > 1e-9) {
+            self.particles.clear();
+            return;
+        }
+        let n = ((total * self.config.particles_per_target as f64).ceil() as usize)
+            .clamp(1, self.config.max_particles);
+        let step = total / n as f64;
+        let mut u = self.rng.random::<f64>() * step;
+        let mut out = Vec::with_capacity(n);
+        let mut acc = 0.0;
+        for p in &self.particles {
+            acc += p.w;
+            while u < acc && out.len() < n {
+                out.push(Particle { w: step, ..*p });
+                u += step;
+            }
+        }
+        // Rounding can leave the last slots unfilled; they go to the last particle.
+        if let Some(last) = self.particles.last() {
+            out.resize(n, Particle { w: step, ..*last });
+        }
+        self.particles = out;
+    }
+}

@@ -1,0 +1,152 @@
+//! The seed's tracking loop (its Fig. 2): local detections, fusion with the global ones, the
+//! PHD filter, local detectors for new targets, confidence updates; and the output tracks.
+
+use std::collections::BTreeMap;
+
+use tracker_model::{
+    BoundingBox, Frame, LocalDetectorFactory, Track, TrackId, TrackPoint, TrackSet,
+};
+
+use crate::error::Result;
+use crate::fusion::{DetectorBank, FusionConfig, fuse};
+use crate::smc::{Estimate, PhdStep};
+
+/// A PHD filter over boxes: one frame of detections in, estimates out.
+pub trait PhdFilter {
+    /// Runs one frame.
+    fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep>;
+}
+
+impl PhdFilter for crate::smc::SmcPhd {
+    fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        crate::smc::SmcPhd::step(self, boxes)
+    }
+}
+
+impl PhdFilter for crate::gm::GmPhd {
+    fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        crate::gm::GmPhd::step(self, boxes)
+    }
+}
+
+/// What happened in one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameOutput {
+    /// The frame.
+    pub frame: Frame,
+    /// Reported targets.
+    pub estimates: Vec<Estimate>,
+    /// N̂.
+    pub expected_targets: f64,
+    /// Observations the filter received (after fusion).
+    pub observations: usize,
+    /// Local detectors alive after the frame.
+    pub local_detectors: usize,
+    /// Degenerate boxes skipped.
+    pub skipped: usize,
+}
+
+/// A PHD filter, optionally fed by local detectors, with the tracks it has reported.
+pub struct PhdTracker<F, D> {
+    filter: F,
+    factory: Option<D>,
+    fusion: FusionConfig,
+    bank: DetectorBank,
+    tracks: BTreeMap<u64, Vec<TrackPoint>>,
+}
+
+impl<F: PhdFilter, D: LocalDetectorFactory> PhdTracker<F, D> {
+    /// A tracker; without a `factory` it uses the global detections only.
+    pub fn new(filter: F, factory: Option<D>, fusion: FusionConfig) -> Result<Self> {
+        fusion.check()?;
+        Ok(Self {
+            filter,
+            factory,
+            fusion,
+            bank: DetectorBank::default(),
+            tracks: BTreeMap::new(),
+        })
+    }
+
+    /// The local detectors.
+    pub fn bank(&self) -> &DetectorBank {
+        &self.bank
+    }
+
+    /// Processes one frame of global detections.
+    pub fn step(&mut self, frame: Frame, global: &[BoundingBox]) -> Result<FrameOutput> {
+        let found = if self.factory.is_some() {
+            let found = self.bank.detect(frame);
+            self.bank.suppress_duplicates(found, self.fusion.fuse_iou)
+        } else {
+            Vec::new()
+        };
+        let local: Vec<BoundingBox> = found.iter().map(|(_, b)| *b).collect();
+        let observations: Vec<BoundingBox> = fuse(global, &local, &self.fusion)
+            .into_iter()
+            .map(|(b, _)| b)
+            .collect();
+        let step = self.filter.step(&observations)?;
+        if let Some(factory) = self.factory.as_mut() {
+            let labels: Vec<u64> = step.estimates.iter().map(|e| e.label).collect();
+            for e in &step.estimates {
+                if !self.bank.has(e.label)
+                    && !self
+                        .bank
+                        .adopt(e.label, &e.bbox, self.fusion.fuse_iou, &labels)
+                {
+                    let detector = factory.spawn(frame, &e.bbox);
+                    self.bank.add(e.label, detector, e.bbox, &self.fusion);
+                }
+                self.bank.confirm(e.label, frame, &e.bbox);
+            }
+            self.bank.update_confidence(&found, global, &self.fusion);
+        }
+        for e in &step.estimates {
+            self.tracks
+                .entry(e.label)
+                .or_default()
+                .push(TrackPoint::boxed(frame, e.bbox));
+        }
+        Ok(FrameOutput {
+            frame,
+            estimates: step.estimates,
+            expected_targets: step.expected_targets,
+            observations: observations.len(),
+            local_detectors: self.bank.detectors().len(),
+            skipped: step.skipped,
+        })
+    }
+
+    /// Every track reported so far (label as id).
+    pub fn tracks(&self) -> Result<TrackSet> {
+        let tracks = self
+            .tracks
+            .iter()
+            .map(|(l, points)| Track::from_points(TrackId(*l), points.clone()))
+            .collect::<tracker_model::Result<Vec<_>>>()?;
+        Ok(TrackSet::from_tracks(tracks)?)
+    }
+}
+
+/// A factory for trackers that use no local detectors.
+pub struct NoLocalDetectors;
+
+impl LocalDetectorFactory for NoLocalDetectors {
+    fn spawn(
+        &mut self,
+        _frame: Frame,
+        _initial: &BoundingBox,
+    ) -> Box<dyn tracker_model::LocalDetector> {
+        Box::new(Never)
+    }
+}
+
+/// A detector that never finds anything.
+struct Never;
+
+impl tracker_model::LocalDetector for Never {
+    fn detect(&mut self, _frame: Frame, _around: &BoundingBox) -> Option<BoundingBox> {
+        None
+    }
+}
