@@ -60,7 +60,8 @@ enum Command {
         #[arg(long)]
         out: PathBuf,
         /// TOML with optional `[model]` (fields of `mcmcda::McmcdaConfig`, overriding a model
-        /// scaled to the median box width), `[online]` and `[gnn]` tables.
+        /// scaled to the median box width), `[online]`, `[gnn]` and `[phd]` (fields of
+        /// `phd_filter::PhdConfig`) tables.
         #[arg(long)]
         config: Option<PathBuf>,
         /// Seed of the MCMC generator.

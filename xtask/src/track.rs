@@ -13,6 +13,7 @@ use mcmcda::{
     TrackInit, nearest_neighbour_tracks, smoothed_tracks,
 };
 use nalgebra::Matrix2;
+use phd_filter::{FusionConfig, Motion, NoLocalDetectors, PhdConfig, PhdTracker, SmcPhd};
 use serde::Deserialize;
 use tracker_model::{
     BoundingBox, ConstantVelocity2, Frame, MotRow, Point2, Track, TrackPoint, TrackSet, format_mot,
@@ -29,6 +30,8 @@ pub enum Tracker {
     Mcmcda,
     /// Global nearest neighbour with M-of-N confirmation.
     Gnn,
+    /// SMC-PHD on boxes (global detections only: no images, so no local detectors).
+    Phd,
 }
 
 /// The optional `--config` TOML: any of the three tables, each field optional. Fields of
@@ -41,6 +44,8 @@ pub(crate) struct TrackConfig {
     online: OnlineConfig,
     #[serde(default)]
     gnn: NearestNeighbourConfig,
+    /// Fields of `phd_filter::PhdConfig`, overriding a configuration scaled to the boxes.
+    phd: Option<toml::Table>,
 }
 
 /// A model scaled to the detections when no `--config` model is given: lengths follow the
@@ -109,15 +114,45 @@ pub(crate) fn track_detections(
     settings: &TrackConfig,
     seed: u64,
 ) -> Result<TrackSet> {
-    let mut model = default_model(rows)?;
-    if let Some(overrides) = &settings.model {
-        let mut table = toml::Table::try_from(&model)?;
-        table.extend(overrides.clone());
-        model = table
-            .try_into()
-            .context("in the [model] table of the configuration")?;
+    match tracker {
+        Tracker::Phd => track_boxes_phd(rows, settings, seed),
+        Tracker::Mcmcda => track_points(true, rows, settings, seed),
+        Tracker::Gnn => track_points(false, rows, settings, seed),
     }
-    let model = model.check()?;
+}
+
+/// SMC-PHD on the boxes themselves.
+fn track_boxes_phd(rows: &[MotRow], settings: &TrackConfig, seed: u64) -> Result<TrackSet> {
+    let config = overridden(&default_phd(rows), settings.phd.as_ref(), "phd")?;
+    let mut phd = PhdTracker::new(
+        SmcPhd::new(config, seed)?,
+        None::<NoLocalDetectors>,
+        FusionConfig::default(),
+    )?;
+    let mut by_frame: std::collections::BTreeMap<Frame, Vec<BoundingBox>> = Default::default();
+    for r in rows {
+        by_frame.entry(r.frame).or_default().push(r.bbox);
+    }
+    let (first, last) = match (by_frame.keys().next(), by_frame.keys().last()) {
+        (Some(a), Some(b)) => (*a, *b),
+        _ => bail!("no detections"),
+    };
+    for frame in first..=last {
+        let boxes = by_frame.get(&frame).map(Vec::as_slice).unwrap_or(&[]);
+        phd.step(frame, boxes)?;
+    }
+    Ok(phd.tracks()?)
+}
+
+/// Online MCMCDA (`use_mcmcda`) or GNN on the box centres; boxes get each track's mean
+/// detection size.
+fn track_points(
+    use_mcmcda: bool,
+    rows: &[MotRow],
+    settings: &TrackConfig,
+    seed: u64,
+) -> Result<TrackSet> {
+    let model = overridden(&default_model(rows)?, settings.model.as_ref(), "model")?.check()?;
     // Detections by frame, in file order within a frame; ids follow that order.
     let mut by_frame: std::collections::BTreeMap<Frame, Vec<MotRow>> = Default::default();
     for r in rows {
@@ -130,27 +165,22 @@ pub(crate) fn track_detections(
             .map(|d| d.bbox.centre())
             .collect::<Vec<Point2>>()
     };
-    let (associations, problem): (Vec<(u64, Vec<MeasId>)>, Problem) = match tracker {
-        Tracker::Mcmcda => {
-            let mut online = OnlineTracker::new(model.clone(), first, settings.online, seed)?;
-            for (frame, dets) in &by_frame {
-                online.push_scan(*frame, &centres(dets))?;
-            }
-            let result = online.finish()?;
-            (result.associations, result.problem)
+    let (associations, problem): (Vec<(u64, Vec<MeasId>)>, Problem) = if use_mcmcda {
+        let mut online = OnlineTracker::new(model.clone(), first, settings.online, seed)?;
+        for (frame, dets) in &by_frame {
+            online.push_scan(*frame, &centres(dets))?;
         }
-        Tracker::Gnn => {
-            let mut problem = Problem::empty(&model, first);
-            for (frame, dets) in &by_frame {
-                problem.push_scan(*frame, &centres(dets))?;
-            }
-            let window = 0..=problem.n_scans() - 1;
-            let tracks = nearest_neighbour_tracks(&model, &problem, window, &settings.gnn)?;
-            (
-                tracks.into_iter().zip(0..).map(|(t, i)| (i, t)).collect(),
-                problem,
-            )
+        let result = online.finish()?;
+        (result.associations, result.problem)
+    } else {
+        let mut problem = Problem::empty(&model, first);
+        for (frame, dets) in &by_frame {
+            problem.push_scan(*frame, &centres(dets))?;
         }
+        let window = 0..=problem.n_scans() - 1;
+        let tracks = nearest_neighbour_tracks(&model, &problem, window, &settings.gnn)?;
+        let labelled = tracks.into_iter().zip(0..).map(|(t, i)| (i, t)).collect();
+        (labelled, problem)
     };
     let mut tracks = Vec::with_capacity(associations.len());
     for (label, meas) in &associations {
@@ -181,6 +211,59 @@ pub(crate) fn track_detections(
         }
     }
     Ok(TrackSet::from_tracks(tracks)?)
+}
+
+/// A PHD configuration scaled to the detections: noise and motion from the median box
+/// size, clutter uniform over the image extent and the range of box sizes.
+fn default_phd(rows: &[MotRow]) -> PhdConfig {
+    let median = |f: fn(&MotRow) -> f64| {
+        let mut v: Vec<f64> = rows.iter().map(f).collect();
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2].max(1.0)
+    };
+    let range = |f: fn(&MotRow) -> f64| {
+        let (lo, hi) = rows
+            .iter()
+            .map(f)
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            });
+        (hi - lo).max(1.0)
+    };
+    let (w, h) = (median(|r| r.bbox.width), median(|r| r.bbox.height));
+    PhdConfig {
+        measurement_volume: range(|r| r.bbox.centre().x)
+            * range(|r| r.bbox.centre().y)
+            * range(|r| r.bbox.width)
+            * range(|r| r.bbox.height),
+        measurement_std: [0.1 * w, 0.05 * h, 0.1 * w, 0.05 * h],
+        motion: Motion::RandomWalk {
+            position_std: 0.1 * w,
+            size_std: 0.02 * h,
+        },
+        // Public detectors miss far more than the seed's 5 %; a lower p_D keeps a track
+        // through a missed detection.
+        p_detect: 0.8,
+        particles_per_target: 300,
+        birth_particles: 100,
+        ..PhdConfig::default()
+    }
+}
+
+/// Merges the fields of `overrides` into `base` (both serde structs) and checks the result.
+fn overridden<T: Clone + serde::Serialize + serde::de::DeserializeOwned>(
+    base: &T,
+    overrides: Option<&toml::Table>,
+    what: &str,
+) -> Result<T> {
+    let Some(overrides) = overrides else {
+        return Ok(base.clone());
+    };
+    let mut table = toml::Table::try_from(base)?;
+    table.extend(overrides.clone());
+    table
+        .try_into()
+        .with_context(|| format!("in the [{what}] table of the configuration"))
 }
 
 /// Runs the command.

@@ -204,6 +204,11 @@ impl Likelihood {
         }
     }
 
+    /// Half-width in c_x beyond which g(z | x) is 0 (the cut-off along the first axis alone).
+    pub(crate) fn reach_x(&self) -> f64 {
+        (self.cutoff / self.inv_var[0]).sqrt()
+    }
+
     /// g(z | x): density of measuring `z` from state `x`.
     #[inline]
     pub(crate) fn density(&self, z: &BoxMeasurement, x: &BoxState) -> f64 {

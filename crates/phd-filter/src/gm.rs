@@ -68,6 +68,9 @@ pub struct GmPhd {
 
 const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
+/// Squared Mahalanobis distance beyond which a (component, measurement) pair is ignored.
+const GATE: f64 = 50.0;
+
 /// Per-component quantities of the update that do not depend on the measurement.
 struct Innovation {
     factor: Cholesky<f64, nalgebra::Const<4>>,
@@ -213,6 +216,11 @@ impl GmPhd {
         for (j, (_, z)) in zs.iter().enumerate() {
             for (i, (c, inn)) in self.components.iter().zip(&innovations).enumerate() {
                 let (ld, residual) = log_density(c, inn, z);
+                // Pairs beyond the gate (the SMC likelihood's cut-off, χ² = 50) would only
+                // add components that pruning removes.
+                if ld < inn.log_norm - 0.5 * GATE {
+                    continue;
+                }
                 let q = p_d * c.w * ld.exp();
                 if q > 0.0 {
                     per_z[j].push((i, q, residual));
@@ -284,36 +292,52 @@ impl GmPhd {
         })
     }
 
-    /// Pruning, merging and capping.
+    /// Pruning, merging and capping: components are visited by decreasing weight; each one not
+    /// yet merged absorbs every later one within the merge distance (Vo & Ma's Table II).
     fn reduce(&mut self) -> Result<()> {
         let mut rest: Vec<Component> = self
             .components
             .drain(..)
             .filter(|c| c.w > self.gm.prune_below && c.w.is_finite())
             .collect();
+        rest.sort_by(|a, b| b.w.total_cmp(&a.w));
+        let u = self.gm.merge_distance;
+        let mut taken = vec![false; rest.len()];
         let mut merged = Vec::new();
-        while !rest.is_empty() {
-            let (heaviest, _) =
-                rest.iter()
-                    .enumerate()
-                    .fold((0, f64::NEG_INFINITY), |best, (i, c)| {
-                        if c.w > best.1 { (i, c.w) } else { best }
-                    });
-            let anchor = rest[heaviest];
+        for i in 0..rest.len() {
+            if taken[i] {
+                continue;
+            }
+            let anchor = rest[i];
             let factor = Cholesky::new(anchor.p).ok_or(Error::Model(
                 tracker_model::Error::NotPositiveDefinite {
                     what: "GM-PHD component covariance",
                 },
             ))?;
-            let (close, far): (Vec<Component>, Vec<Component>) = rest.into_iter().partition(|c| {
+            let mut members = vec![i];
+            for (k, c) in rest.iter().enumerate().skip(i + 1) {
+                if taken[k] {
+                    continue;
+                }
                 let d = c.m - anchor.m;
-                d.dot(&factor.solve(&d)) <= self.gm.merge_distance
-            });
-            let w: f64 = close.iter().map(|c| c.w).sum();
-            let m: Vec6 = close.iter().map(|c| c.m * c.w).sum::<Vec6>() / w;
-            let p: Mat6 = close
+                // dᵀP⁻¹d ≥ d_k² / P_kk for every axis k (Cauchy-Schwarz in P's inner
+                // product), so a component far along c_x or c_y is rejected without solving.
+                if d[0] * d[0] > u * anchor.p[(0, 0)] || d[1] * d[1] > u * anchor.p[(1, 1)] {
+                    continue;
+                }
+                if d.dot(&factor.solve(&d)) <= u {
+                    taken[k] = true;
+                    members.push(k);
+                }
+            }
+            let w: f64 = members.iter().map(|&k| rest[k].w).sum();
+            let m: Vec6 = members.iter().map(|&k| rest[k].m * rest[k].w).sum::<Vec6>() / w;
+            let p: Mat6 = members
                 .iter()
-                .map(|c| (c.p + (m - c.m) * (m - c.m).transpose()) * c.w)
+                .map(|&k| {
+                    let c = &rest[k];
+                    (c.p + (m - c.m) * (m - c.m).transpose()) * c.w
+                })
                 .sum::<Mat6>()
                 / w;
             merged.push(Component {
@@ -322,7 +346,6 @@ impl GmPhd {
                 p: (p + p.transpose()) * 0.5,
                 label: anchor.label,
             });
-            rest = far;
         }
         merged.sort_by(|a, b| b.w.total_cmp(&a.w));
         merged.truncate(self.gm.max_components);

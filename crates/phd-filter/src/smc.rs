@@ -113,14 +113,48 @@ fn stream_rng(seed: u64, stream: usize) -> ChaCha8Rng {
     rng
 }
 
+/// The frame's measurements sorted by centre x, so that a particle visits only those within
+/// the likelihood's reach instead of all of them.
+struct SortedByX {
+    xs: Vec<f64>,
+    index: Vec<usize>,
+    reach: f64,
+}
+
+impl SortedByX {
+    fn new(zs: &[BoxMeasurement], reach: f64) -> Self {
+        let mut index: Vec<usize> = (0..zs.len()).collect();
+        index.sort_by(|&a, &b| zs[a][0].total_cmp(&zs[b][0]).then(a.cmp(&b)));
+        Self {
+            xs: index.iter().map(|&j| zs[j][0]).collect(),
+            index,
+            reach,
+        }
+    }
+
+    /// Indices of the measurements whose c_x is within reach of `x`, in increasing c_x.
+    fn near(&self, x: f64) -> impl Iterator<Item = usize> + '_ {
+        let start = self.xs.partition_point(|&v| v < x - self.reach);
+        self.xs[start..]
+            .iter()
+            .take_while(move |&&v| v <= x + self.reach)
+            .zip(&self.index[start..])
+            .map(|(_, &j)| j)
+    }
+}
+
+/// One chunk's non-zero likelihoods as (particle in chunk, measurement, g), and per
+/// measurement Σ p_D g w.
+type ChunkDensities = (Vec<(u32, u32, f64)>, Vec<f64>);
+
 /// Per-measurement sums of one chunk of persistent particles.
 #[derive(Clone, Default)]
 struct Grouping {
     /// Σ p_D g w / L and Σ (p_D g w / L) x, per measurement.
     mass: Vec<f64>,
     mean: Vec<BoxState>,
-    /// Mass per label, per measurement.
-    labels: Vec<BTreeMap<u64, f64>>,
+    /// Mass per label, per measurement, as runs of (label, mass).
+    labels: Vec<Vec<(u64, f64)>>,
 }
 
 impl SmcPhd {
@@ -210,24 +244,34 @@ impl SmcPhd {
 
         // L(z) = κ + ν_b(z) ḡ_b(z) + Σ_i p_D g(z|x_i) w_i.
         let n_z = zs.len();
-        let persistent_sum: Vec<f64> = self
+        let sorted = SortedByX::new(&zs, lik.reach_x());
+        // One pass computes every non-zero g(z|x_i) once, per chunk as (particle, z, g), and
+        // the chunk's sums; the update pass reuses them.
+        let densities: Vec<ChunkDensities> = self
             .particles
             .par_chunks(CHUNK)
             .map(|chunk| {
                 let mut sums = vec![0.0; n_z];
-                for p in chunk {
-                    for (s, z) in sums.iter_mut().zip(&zs) {
-                        *s += p_d * lik.density(z, &p.x) * p.w;
+                let mut pairs = Vec::new();
+                for (i, p) in chunk.iter().enumerate() {
+                    for j in sorted.near(p.x[0]) {
+                        let d = lik.density(&zs[j], &p.x);
+                        if d > 0.0 {
+                            sums[j] += p_d * d * p.w;
+                            pairs.push((i as u32, j as u32, d));
+                        }
                     }
                 }
-                sums
+                (pairs, sums)
             })
-            .collect::<Vec<_>>()
-            .into_iter()
-            .fold(vec![0.0; n_z], |mut acc, s| {
-                acc.iter_mut().zip(s).for_each(|(a, b)| *a += b);
-                acc
-            });
+            .collect();
+        let mut persistent_sum = vec![0.0; n_z];
+        for (_, sums) in &densities {
+            persistent_sum
+                .iter_mut()
+                .zip(sums)
+                .for_each(|(a, b)| *a += b);
+        }
         let kappa = cfg.clutter_intensity();
         let newborn_g: Vec<Vec<f64>> = newborn
             .par_iter()
@@ -245,28 +289,32 @@ impl SmcPhd {
         let groups: Vec<Grouping> = self
             .particles
             .par_chunks_mut(CHUNK)
-            .map(|chunk| {
+            .zip(&densities)
+            .map(|(chunk, (pairs, _))| {
                 let mut g = Grouping {
                     mass: vec![0.0; n_z],
                     mean: vec![[0.0; 6]; n_z],
-                    labels: vec![BTreeMap::new(); n_z],
+                    labels: vec![Vec::new(); n_z],
                 };
-                for p in chunk {
-                    let mut factor = 1.0 - p_d;
-                    for j in 0..n_z {
-                        let d = lik.density(&zs[j], &p.x);
-                        if d > 0.0 {
-                            let share = p_d * d / big_l[j];
-                            factor += share;
-                            let m = share * p.w;
-                            g.mass[j] += m;
-                            for k in 0..6 {
-                                g.mean[j][k] += m * p.x[k];
-                            }
-                            *g.labels[j].entry(p.label).or_default() += m;
-                        }
+                let mut factor = vec![1.0 - p_d; chunk.len()];
+                for &(i, j, d) in pairs {
+                    let (i, j) = (i as usize, j as usize);
+                    let p = &chunk[i];
+                    let share = p_d * d / big_l[j];
+                    factor[i] += share;
+                    let m = share * p.w;
+                    g.mass[j] += m;
+                    for k in 0..6 {
+                        g.mean[j][k] += m * p.x[k];
                     }
-                    p.w *= factor;
+                    // Particles of one target are mostly adjacent: extend the last run.
+                    match g.labels[j].last_mut() {
+                        Some((l, acc)) if *l == p.label => *acc += m,
+                        _ => g.labels[j].push((p.label, m)),
+                    }
+                }
+                for (p, f) in chunk.iter_mut().zip(factor) {
+                    p.w *= f;
                 }
                 g
             })
@@ -274,35 +322,33 @@ impl SmcPhd {
         let expected_targets: f64 = self.particles.iter().map(|p| p.w).sum();
 
         // Grouping extraction (eq. 8), larger W first so a contested label goes to it.
-        let mut total = Grouping {
-            mass: vec![0.0; n_z],
-            mean: vec![[0.0; 6]; n_z],
-            labels: vec![BTreeMap::new(); n_z],
-        };
+        let mut mass = vec![0.0; n_z];
+        let mut mean = vec![[0.0; 6]; n_z];
+        let mut labels: Vec<BTreeMap<u64, f64>> = vec![BTreeMap::new(); n_z];
         for g in groups {
             for j in 0..n_z {
-                total.mass[j] += g.mass[j];
-                for k in 0..6 {
-                    total.mean[j][k] += g.mean[j][k];
+                mass[j] += g.mass[j];
+                for (a, b) in mean[j].iter_mut().zip(&g.mean[j]) {
+                    *a += b;
                 }
                 for (l, m) in &g.labels[j] {
-                    *total.labels[j].entry(*l).or_default() += m;
+                    *labels[j].entry(*l).or_default() += m;
                 }
             }
         }
         let mut order: Vec<usize> = (0..n_z)
-            .filter(|&j| total.mass[j] > cfg.extraction_threshold)
+            .filter(|&j| mass[j] > cfg.extraction_threshold)
             .collect();
-        order.sort_by(|&a, &b| total.mass[b].total_cmp(&total.mass[a]).then(a.cmp(&b)));
+        order.sort_by(|&a, &b| mass[b].total_cmp(&mass[a]).then(a.cmp(&b)));
         let mut used_labels: Vec<u64> = Vec::new();
         let mut estimates = Vec::with_capacity(order.len());
         for j in order {
-            let w = total.mass[j];
-            let state = total.mean[j].map(|v| v / w);
+            let w = mass[j];
+            let state = mean[j].map(|v| v / w);
             // The oldest label with a fair share of W(z): a target that faded after a missed
             // detection and was re-born from the next one keeps its identity.
             let share = cfg.label_min_share * w;
-            let label = total.labels[j]
+            let label = labels[j]
                 .iter()
                 .filter(|(_, m)| **m >= share)
                 .map(|(l, _)| *l)
@@ -321,46 +367,52 @@ impl SmcPhd {
             });
         }
 
-        // Newborns: updated by their own measurement only, then join the persistent set.
+        // Resample the persistent particles to ρ N̂; each newborn group, updated by its own
+        // measurement only, is resampled to J_b particles and joins them (Ristic et al.).
+        let persistent = std::mem::take(&mut self.particles);
+        let target = (expected_targets * cfg.particles_per_target as f64).ceil() as usize;
+        self.particles = resample(&persistent, target.min(cfg.max_particles), &mut self.rng);
         for ((group, g), l) in newborn.into_iter().zip(&newborn_g).zip(&big_l) {
-            self.particles
-                .extend(group.into_iter().zip(g).map(|(mut p, d)| {
-                    p.w *= d / l;
-                    p
-                }));
+            let weighted: Vec<Particle> = group
+                .into_iter()
+                .zip(g)
+                .map(|(p, d)| Particle {
+                    w: p.w * d / l,
+                    ..p
+                })
+                .collect();
+            let kept = resample(&weighted, cfg.birth_particles, &mut self.rng);
+            self.particles.extend(kept);
         }
-        self.resample();
         Ok(PhdStep {
             estimates,
             expected_targets,
             skipped,
         })
     }
+}
 
-    /// Systematic resampling to ρ N̂ particles (at most `max_particles`), each of weight N̂/J.
-    fn resample(&mut self) {
-        let total: f64 = self.particles.iter().map(|p| p.w).sum();
-        if !(total.is_finite() && total > 1e-9) {
-            self.particles.clear();
-            return;
-        }
-        let n = ((total * self.config.particles_per_target as f64).ceil() as usize)
-            .clamp(1, self.config.max_particles);
-        let step = total / n as f64;
-        let mut u = self.rng.random::<f64>() * step;
-        let mut out = Vec::with_capacity(n);
-        let mut acc = 0.0;
-        for p in &self.particles {
-            acc += p.w;
-            while u < acc && out.len() < n {
-                out.push(Particle { w: step, ..*p });
-                u += step;
-            }
-        }
-        // Rounding can leave the last slots unfilled; they go to the last particle.
-        if let Some(last) = self.particles.last() {
-            out.resize(n, Particle { w: step, ..*last });
-        }
-        self.particles = out;
+/// Systematic resampling of `particles` to `n` particles of equal weight (their total); an
+/// empty or weightless set gives nothing.
+fn resample<R: Rng + ?Sized>(particles: &[Particle], n: usize, rng: &mut R) -> Vec<Particle> {
+    let total: f64 = particles.iter().map(|p| p.w).sum();
+    if !(total.is_finite() && total > 1e-12) || n == 0 {
+        return Vec::new();
     }
+    let step = total / n as f64;
+    let mut u = rng.random::<f64>() * step;
+    let mut out = Vec::with_capacity(n);
+    let mut acc = 0.0;
+    for p in particles {
+        acc += p.w;
+        while u < acc && out.len() < n {
+            out.push(Particle { w: step, ..*p });
+            u += step;
+        }
+    }
+    // Rounding can leave the last slots unfilled; they go to the last particle.
+    if let Some(last) = particles.last() {
+        out.resize(n, Particle { w: step, ..*last });
+    }
+    out
 }
