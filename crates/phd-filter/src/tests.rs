@@ -287,3 +287,48 @@ fn smc_is_reproducible_whatever_the_thread_count() {
     );
     assert_eq!(pa, pb);
 }
+
+#[test]
+fn constant_velocity_option_follows_moving_boxes() {
+    use crate::Motion;
+    let config = PhdConfig {
+        clutter_rate: 1e-3,
+        particles_per_target: 1000,
+        motion: Motion::ConstantVelocity {
+            acceleration_std: 0.5,
+            size_std: 0.5,
+        },
+        birth_velocity_std: 4.0,
+        ..PhdConfig::default()
+    };
+    let mut filter = SmcPhd::new(config, 6).unwrap();
+    let mut gm = GmPhd::new(config, GmConfig::default()).unwrap();
+    // Two boxes moving at (+3, +1) and (−2, 0) pixels per frame, seen exactly.
+    let at = |t: f64| {
+        vec![
+            bx(100.0 + 3.0 * t, 200.0 + t, 40.0, 100.0),
+            bx(500.0 - 2.0 * t, 150.0, 30.0, 80.0),
+        ]
+    };
+    for t in 0..20 {
+        let boxes = at(f64::from(t));
+        let out = filter.step(&boxes).unwrap();
+        let out_gm = gm.step(&boxes).unwrap();
+        if t >= 10 {
+            for o in [&out, &out_gm] {
+                assert_eq!(o.estimates.len(), 2, "frame {t}");
+                for e in &o.estimates {
+                    let best = boxes.iter().map(|b| b.iou(&e.bbox)).fold(0.0, f64::max);
+                    assert!(best > 0.8, "frame {t}: IoU {best}");
+                }
+            }
+            // The velocity is learnt: each estimate moves like its box.
+            for e in &out.estimates {
+                let v = (e.state[4], e.state[5]);
+                let ok = ((v.0 - 3.0).abs() < 1.0 && (v.1 - 1.0).abs() < 1.0)
+                    || ((v.0 + 2.0).abs() < 1.0 && v.1.abs() < 1.0);
+                assert!(ok, "frame {t}: velocity {v:?}");
+            }
+        }
+    }
+}
