@@ -67,18 +67,7 @@ impl Model {
         let p = &node.cov;
         let x = &node.mean;
         let mean_pred = Vector4::new(x[0] + tau * x[2], x[1] + tau * x[3], x[2], x[3]);
-        // F P Fᵀ for F = [[I, τI], [0, I]] in 2×2 blocks [[A, B], [Bᵀ, C]].
-        let mut cov_pred = *p;
-        for i in 0..2 {
-            for j in 0..2 {
-                let c = p[(i + 2, j + 2)];
-                let b = p[(i, j + 2)];
-                let bt = p[(i + 2, j)];
-                cov_pred[(i, j)] = p[(i, j)] + tau * (b + bt) + tau * tau * c;
-                cov_pred[(i, j + 2)] = b + tau * c;
-                cov_pred[(i + 2, j)] = bt + tau * c;
-            }
-        }
+        let mut cov_pred = self.config.motion.transport_covariance(p, gap as u32);
         cov_pred += self.process_noise[gap - 1];
         let s: Matrix2<f64> =
             cov_pred.fixed_view::<2, 2>(0, 0).into_owned() + self.config.measurement_noise;

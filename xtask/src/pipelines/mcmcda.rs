@@ -412,27 +412,26 @@ pub fn sweep(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutp
         ]);
     }
     let [pd_mcmc, pd_gnn, cl_mcmc, cl_gnn] = curves;
-    let pd_plot = chart(
-        &Axes {
-            title: "Association F1 against the detection probability",
-            x: "p_d",
-            y: "F1",
-        },
-        &[
-            Series::new("MCMCDA", pd_mcmc, Style::Line, 0),
-            Series::new("GNN", pd_gnn, Style::Line, 1),
-        ],
+    let f1_chart = |title: &str, x: &str, mcmc, gnn| {
+        chart(
+            &Axes { title, x, y: "F1" },
+            &[
+                Series::new("MCMCDA", mcmc, Style::Line, 0),
+                Series::new("GNN", gnn, Style::Line, 1),
+            ],
+        )
+    };
+    let pd_plot = f1_chart(
+        "Association F1 against the detection probability",
+        "p_d",
+        pd_mcmc,
+        pd_gnn,
     )?;
-    let clutter_plot = chart(
-        &Axes {
-            title: "Association F1 against the clutter rate",
-            x: "false alarms per scan (λ_f V)",
-            y: "F1",
-        },
-        &[
-            Series::new("MCMCDA", cl_mcmc, Style::Line, 0),
-            Series::new("GNN", cl_gnn, Style::Line, 1),
-        ],
+    let clutter_plot = f1_chart(
+        "Association F1 against the clutter rate",
+        "false alarms per scan (λ_f V)",
+        cl_mcmc,
+        cl_gnn,
     )?;
     Ok(PipelineOutput {
         metrics,
