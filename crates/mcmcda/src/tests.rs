@@ -550,3 +550,34 @@ fn bad_input_gives_errors_not_panics() {
     let start = Partition::empty(&model, &problem, 0..=0).unwrap();
     assert!(run_chains(&start, 1, 100, 0).unwrap().tracks.is_empty());
 }
+
+#[test]
+fn running_mmse_matches_the_exact_posterior_mean() {
+    // f(ω) = (number of tracks, number of false alarms): its posterior mean by enumeration
+    // against the chain's running mean.
+    let model = tiny_config().check().unwrap();
+    let problem = Problem::from_scans(&model, &tiny_scans()).unwrap();
+    let exact = exact_posterior(&model, &problem);
+    let n = problem.n_measurements() as f64;
+    let f = |tracks: &[Vec<u32>]| {
+        let held: usize = tracks.iter().map(Vec::len).sum();
+        [tracks.len() as f64, n - held as f64]
+    };
+    let mut expected = [0.0; 2];
+    for (p, q) in &exact {
+        let v = f(p);
+        expected[0] += q * v[0];
+        expected[1] += q * v[1];
+    }
+    let start = Partition::empty(&model, &problem, 0..=2).unwrap();
+    let mut chain = Chain::new(start, ChaCha8Rng::seed_from_u64(77));
+    let mean = chain.run_mmse(1_000_000, |state| f(&state.canonical()).to_vec());
+    for k in 0..2 {
+        assert!(
+            (mean[k] - expected[k]).abs() < 0.02,
+            "component {k}: {} vs exact {}",
+            mean[k],
+            expected[k]
+        );
+    }
+}
