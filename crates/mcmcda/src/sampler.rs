@@ -60,6 +60,9 @@ pub struct Chain<'a, R> {
     /// Tests force acceptance to check that every move's reverse restores ω.
     #[cfg(test)]
     pub(crate) force_accept: bool,
+    /// Tests read the forward proposal probability of the last proposal.
+    #[cfg(test)]
+    pub(crate) last_log_q: Option<f64>,
 }
 
 impl<'a, R: Rng> Chain<'a, R> {
@@ -78,6 +81,8 @@ impl<'a, R: Rng> Chain<'a, R> {
             grown: Vec::new(),
             #[cfg(test)]
             force_accept: false,
+            #[cfg(test)]
+            last_log_q: None,
         }
     }
 
@@ -169,6 +174,10 @@ impl<'a, R: Rng> Chain<'a, R> {
     /// Metropolis-Hastings acceptance of a change of the log posterior by `delta`.
     fn accept(&mut self, delta: f64, log_q_forward: f64, log_q_reverse: f64) -> bool {
         let log_ratio = delta + log_q_reverse - log_q_forward;
+        #[cfg(test)]
+        {
+            self.last_log_q = Some(log_q_forward);
+        }
         #[cfg(test)]
         if self.force_accept {
             self.log_posterior += delta;

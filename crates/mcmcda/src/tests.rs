@@ -581,3 +581,94 @@ fn running_mmse_matches_the_exact_posterior_mean() {
         );
     }
 }
+
+#[test]
+fn proposal_frequencies_match_the_computed_q() {
+    // From one fixed partition, draw many proposals (each from a fresh copy) and compare how
+    // often each new partition is proposed with the q the sampler puts in the
+    // Metropolis-Hastings ratio. This checks every move's q directly, including sums over
+    // several ways and the switch's two ends.
+    // Two targets crossing (A, B), one long straight target (C), one cut in two (D), and
+    // a few false alarms; all within reach of each other's neighbourhoods where it matters.
+    let points = |f: usize| -> Vec<(f64, f64)> {
+        let t = f as f64;
+        let mut v = vec![
+            (20.0 * t, 20.0 * t),
+            (20.0 * t, 80.0 - 19.0 * t),
+            (200.0, 10.0 * t),
+            (300.0, 12.0 * t),
+        ];
+        v.extend(match f {
+            1 => vec![(100.0, 100.0)],
+            2 => vec![(30.0, 150.0), (210.0, 60.0)],
+            3 => vec![(150.0, 50.0)],
+            _ => vec![],
+        });
+        v
+    };
+    let scans: Vec<Scan> = (0..5).map(|f| scan(f as u32, &points(f))).collect();
+    let model = McmcdaConfig {
+        max_speed: 60.0,
+        max_gap: 3,
+        gap_distribution: crate::GapDistribution::Uniform,
+        ..McmcdaConfig::default()
+    }
+    .check()
+    .unwrap();
+    let problem = Problem::from_scans(&model, &scans).unwrap();
+    // Ids: scan f's points in order; target k of scan f is problem.scan(f)[k].
+    let id = |f: usize, k: usize| problem.scan(f)[k];
+    let track = |k: usize, frames: std::ops::Range<usize>| -> Vec<u32> {
+        frames.map(|f| id(f, k)).collect()
+    };
+    let tracks = vec![
+        track(0, 0..5),
+        track(1, 0..5),
+        track(2, 0..5),
+        track(3, 0..2),
+        track(3, 2..5),
+    ];
+    let window = 0..=problem.n_scans() - 1;
+    let start = Partition::from_tracks(&model, &problem, window, &tracks).unwrap();
+    assert!(start.n_tracks() >= 4, "{} tracks", start.n_tracks());
+    let from = start.canonical();
+    let n = 300_000u64;
+    let mut seen: HashMap<Vec<Vec<u32>>, (u64, f64, Move)> = HashMap::new();
+    for i in 0..n {
+        let mut chain = Chain::new(start.clone(), ChaCha8Rng::seed_from_u64(i));
+        chain.force_accept = true;
+        let (m, _) = chain.step();
+        let to = chain.state().canonical();
+        if let (Some(q), true) = (chain.last_log_q, to != from) {
+            let entry = seen.entry(to).or_insert((0, q, m));
+            entry.0 += 1;
+            assert!((entry.1 - q).abs() < 1e-9, "{m:?}: q differs between draws");
+        }
+    }
+    let mut checked = [0u32; 8];
+    for (count, log_q, m) in seen.values() {
+        let expected = n as f64 * log_q.exp();
+        if expected < 30.0 {
+            continue;
+        }
+        let z = (*count as f64 - expected) / expected.sqrt();
+        assert!(
+            z.abs() < 5.0,
+            "{m:?}: proposed {count} times, q predicts {expected:.0}"
+        );
+        checked[m.index()] += 1;
+    }
+    for m in [
+        Move::Birth,
+        Move::Death,
+        Move::Split,
+        Move::Merge,
+        Move::Reduction,
+        Move::Switch,
+    ] {
+        assert!(
+            checked[m.index()] > 0,
+            "no {m:?} proposal frequent enough: {checked:?}"
+        );
+    }
+}
