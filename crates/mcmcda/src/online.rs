@@ -80,6 +80,8 @@ pub struct OnlineTracker {
     next_label: u64,
     /// Final associations of the scans that left the window, by label.
     committed: BTreeMap<u64, Vec<MeasId>>,
+    /// The first scan not committed yet.
+    open_from: usize,
 }
 
 impl OnlineTracker {
@@ -100,6 +102,7 @@ impl OnlineTracker {
             map: Vec::new(),
             next_label: 0,
             committed: BTreeMap::new(),
+            open_from: 0,
         })
     }
 
@@ -112,19 +115,10 @@ impl OnlineTracker {
         self.problem.n_scans().saturating_sub(self.config.window)
     }
 
-    /// The first scan whose associations are not final yet.
-    fn open_from(&self) -> usize {
-        if self.problem.n_scans() >= self.config.window {
-            self.window_start() + 1
-        } else {
-            0
-        }
-    }
-
     /// Adds a measurement that arrived late for `frame`, whose scan must still be open (in
     /// the next window); it is used from the next window on.
     pub fn add_late(&mut self, frame: Frame, position: Point2) -> Result<MeasId> {
-        let lo = self.problem.first_frame() + self.open_from() as Frame;
+        let lo = self.problem.first_frame() + self.open_from as Frame;
         if frame < lo {
             return Err(Error::Invalid(format!(
                 "late measurement for frame {frame} arrives after its scan left the window \
@@ -139,6 +133,11 @@ impl OnlineTracker {
         self.problem.push_scan(frame, points)?;
         let hi = self.problem.n_scans() - 1;
         let lo = self.window_start();
+        // Scans leaving the window now (one, or more after a jump in frames) keep the
+        // associations of the last MAP that saw them: those become final.
+        if lo > self.open_from {
+            self.commit(self.open_from..=lo - 1);
+        }
         let mut start = Partition::empty(&self.model, &self.problem, lo..=hi)?;
         for (_, track) in &self.map {
             let kept: Vec<MeasId> = track
@@ -157,10 +156,6 @@ impl OnlineTracker {
         let best = best.to_vec();
         drop(chain);
         self.map = relabel(&self.map, best, &mut self.next_label);
-        // The window's first scan leaves with the next scan: its associations are final.
-        if hi + 1 >= self.config.window {
-            self.commit(lo..=lo);
-        }
         let map_partition = Partition::from_tracks(
             &self.model,
             &self.problem,
@@ -189,7 +184,9 @@ impl OnlineTracker {
         })
     }
 
+    /// Makes the current MAP's associations in `scans` final.
     fn commit(&mut self, scans: std::ops::RangeInclusive<usize>) {
+        self.open_from = self.open_from.max(scans.end() + 1);
         for (label, track) in &self.map {
             let in_scans = track
                 .iter()
@@ -202,9 +199,8 @@ impl OnlineTracker {
     /// Commits the current window and returns every track (label as id) smoothed over its
     /// committed measurements, with the associations.
     pub fn finish(mut self) -> Result<OnlineResult> {
-        let open = self.open_from();
-        if open < self.problem.n_scans() {
-            self.commit(open..=self.problem.n_scans() - 1);
+        if self.open_from < self.problem.n_scans() {
+            self.commit(self.open_from..=self.problem.n_scans() - 1);
         }
         let mut tracks = TrackSet::new();
         let mut associations = Vec::new();

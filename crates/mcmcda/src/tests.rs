@@ -672,3 +672,26 @@ fn proposal_frequencies_match_the_computed_q() {
         );
     }
 }
+
+#[test]
+fn online_tracker_commits_scans_skipped_by_a_jump_in_frames() {
+    use crate::{OnlineConfig, OnlineTracker};
+    let scans = three_walkers(30, &[]);
+    let model = McmcdaConfig::default().check().unwrap();
+    let config = OnlineConfig {
+        window: 5,
+        samples_per_scan: 300,
+        ..OnlineConfig::default()
+    };
+    let mut tracker = OnlineTracker::new(model, 0, config, 9).unwrap();
+    // Frames 12 and 13 never arrive: the window jumps by three scans at frame 14.
+    for s in scans.iter().filter(|s| s.frame != 12 && s.frame != 13) {
+        let points: Vec<Vector2<f64>> = s.measurements.iter().map(|m| m.value).collect();
+        tracker.push_scan(s.frame, &points).unwrap();
+    }
+    let result = tracker.finish().unwrap();
+    let mut lengths: Vec<usize> = result.associations.iter().map(|(_, t)| t.len()).collect();
+    lengths.sort_unstable();
+    // Every received measurement is committed to its walker (a gap of 3 scans ≤ d̄).
+    assert_eq!(lengths, vec![28, 28, 28]);
+}
