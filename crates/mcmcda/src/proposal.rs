@@ -2,8 +2,8 @@
 //! exact probability q(ω → ω') of every move, evaluated from the partition alone.
 //!
 //! Probabilities are evaluated by functions separate from the sampling code, so the two can
-//! be checked against each other (the exactness test compares the chain with the enumerated
-//! posterior, which only holds if they agree). Where two move types can produce the same ω'
+//! be checked against each other (the tests compare proposal frequencies with these q, and
+//! the chain with the enumerated posterior, which only holds if they agree). Where two move types can produce the same ω'
 //! (an update that regrows the old tail and then some is also an extension), q sums over
 //! every way, as the Metropolis-Hastings ratio requires.
 
