@@ -559,26 +559,21 @@ pub fn online(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOut
         let q = tp.location.position();
         (q.x, q.y)
     };
+    // Only the first series of each kind is named, so the legend has one entry per kind.
+    let name = |i: usize, label: &'static str| if i == 0 { label } else { "" };
     let mut series: Vec<Series> = sim
         .truth
         .tracks()
         .iter()
-        .map(|t| {
-            Series::new(
-                "",
-                t.points().iter().map(position).collect(),
-                Style::ThinLine,
-                7,
-            )
+        .enumerate()
+        .map(|(i, t)| {
+            let points = t.points().iter().map(position).collect();
+            Series::new(name(i, "true trajectories"), points, Style::ThinLine, 7)
         })
         .collect();
     series.extend(result.tracks.tracks().iter().enumerate().map(|(i, t)| {
-        Series::new(
-            "",
-            t.points().iter().map(position).collect(),
-            Style::Line,
-            i % 7,
-        )
+        let points = t.points().iter().map(position).collect();
+        Series::new(name(i, "tracks"), points, Style::Line, i % 7)
     }));
     let tracks_plot = chart(
         &Axes {
