@@ -6,7 +6,6 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::assignment;
 use crate::error::Result;
 use crate::sequence::Sequence;
 
@@ -81,7 +80,7 @@ pub fn clear_mot(seq: &Sequence, threshold: f64) -> Result<ClearMetrics> {
         }
         current.iter_mut().for_each(|m| *m = None);
         let mut n_matched = 0;
-        for (i, j) in assignment::maximise(ng, np, &scores)? {
+        for (i, j) in tracker_model::assignment::maximise(ng, np, &scores)? {
             if scores[i * np + j] <= eps {
                 continue;
             }

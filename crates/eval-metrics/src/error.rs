@@ -17,9 +17,6 @@ pub enum Error {
     /// Inputs that cannot be compared (different lengths, boxes against points with IoU, ...).
     #[error("incompatible inputs: {0}")]
     Incompatible(String),
-    /// The assignment solver rejected its cost matrix (it contained NaN or infinity).
-    #[error("assignment failed: {0}")]
-    Assignment(String),
 }
 
 /// Result with eval-metrics' [`Error`].

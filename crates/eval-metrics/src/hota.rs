@@ -6,7 +6,6 @@
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::assignment;
 use crate::error::Result;
 use crate::sequence::{NO_PAIR, Sequence};
 
@@ -108,7 +107,7 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
                     }
                 })
                 .collect();
-            let pairs = assignment::maximise(f.gt.len(), np, &score)?
+            let pairs = tracker_model::assignment::maximise(f.gt.len(), np, &score)?
                 .into_iter()
                 .map(|(i, j)| (f.pair[i * np + j], f.sim(i, j)))
                 .filter(|&(pair, _)| pair != NO_PAIR)

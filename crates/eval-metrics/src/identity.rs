@@ -9,7 +9,6 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::assignment;
 use crate::error::Result;
 use crate::sequence::{NO_PAIR, Sequence};
 
@@ -66,7 +65,7 @@ pub fn identity(seq: &Sequence, threshold: f64) -> Result<IdentityMetrics> {
     }
     let mut idtp = 0usize;
     let mut pairs = Vec::new();
-    for (r, c) in assignment::maximise(rows.len(), cols.len(), &weights)? {
+    for (r, c) in tracker_model::assignment::maximise(rows.len(), cols.len(), &weights)? {
         let w = weights[r * cols.len() + c];
         if w > 0.0 {
             idtp += w as usize;

@@ -12,7 +12,8 @@
 //!   SMC-PHD paper), [`distance_error_series`] (HMM), [`mean_error_per_track`] (audio-video
 //!   fusion) and [`association_scores`] (MCMCDA's association F1).
 //!
-//! Optimal assignments come from the `lsap` crate, a port of SciPy's `linear_sum_assignment`.
+//! Optimal assignments come from `tracker_model::assignment` (the `lsap` crate, a port of
+//! SciPy's `linear_sum_assignment`).
 //!
 //! ```
 //! use eval_metrics::{EvalConfig, evaluate};
@@ -26,7 +27,6 @@
 //! assert_eq!(report.hota.hota, 1.0);
 //! ```
 
-mod assignment;
 mod clear;
 mod error;
 mod hota;

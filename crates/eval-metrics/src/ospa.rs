@@ -4,7 +4,6 @@
 use serde::{Deserialize, Serialize};
 use tracker_model::{Frame, Point2, TrackSet};
 
-use crate::assignment;
 use crate::error::{Error, Result};
 
 /// Cut-off c and order p of OSPA and GOSPA.
@@ -87,7 +86,7 @@ fn cutoff_assignment(
                 .map(move |b| ((a - b).norm().min(cfg.cutoff)).powf(cfg.order))
         })
         .collect();
-    let pairs = assignment::minimise(x.len(), y.len(), &costs)?;
+    let pairs = tracker_model::assignment::minimise(x.len(), y.len(), &costs)?;
     let total = pairs.iter().map(|&(i, j)| costs[i * y.len() + j]).sum();
     let close = pairs
         .into_iter()

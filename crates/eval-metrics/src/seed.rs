@@ -8,7 +8,6 @@ use std::collections::{HashMap, HashSet};
 use serde::{Deserialize, Serialize};
 use tracker_model::{Frame, Origin, Point2, Scan, Track, TrackSet};
 
-use crate::assignment;
 use crate::error::{Error, Result};
 use crate::identity;
 use crate::sequence::Sequence;
@@ -124,7 +123,7 @@ pub(crate) fn success_rate_of(seq: &Sequence, threshold: f64) -> Result<SuccessR
                 0.0
             }
         }));
-        n_matched += assignment::maximise(f.gt.len(), f.pred.len(), &weights)?
+        n_matched += tracker_model::assignment::maximise(f.gt.len(), f.pred.len(), &weights)?
             .into_iter()
             .filter(|&(i, j)| weights[i * f.pred.len() + j] > 0.0)
             .count();

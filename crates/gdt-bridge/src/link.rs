@@ -132,11 +132,8 @@ pub fn link_segments(segments: &[Vec<Observation>], cfg: &LinkConfig) -> Result<
     for &(i, j, c) in &costs {
         weights[i * n + j] = (cfg.new_track_cost - c).max(0.0);
     }
-    let (rows, cols) = lsap::solve(n, n, &weights, true)
-        .map_err(|e| Error::Invalid(format!("assignment failed: {e:?}")))?;
-    let mut links: Vec<Link> = rows
+    let mut links: Vec<Link> = tracker_model::assignment::maximise(n, n, &weights)?
         .into_iter()
-        .zip(cols)
         .filter(|&(i, j)| weights[i * n + j] > 0.0)
         .filter_map(|(i, j)| {
             costs

@@ -3,7 +3,10 @@
 
 use nalgebra::{Matrix2, Matrix4};
 use serde::{Deserialize, Serialize};
-use tracker_model::{ConstantVelocity2, TransitionModel, check_positive_semidefinite};
+use tracker_model::{
+    ConstantVelocity2, TransitionModel, check_positive_semidefinite, ensure_open_probability,
+    ensure_positive,
+};
 
 use crate::error::{Error, Result};
 
@@ -213,40 +216,18 @@ pub struct Model {
     pub(crate) initial_velocity_variance: f64,
 }
 
-fn check_probability_open(v: f64, name: &'static str) -> Result<()> {
-    if v.is_finite() && v > 0.0 && v < 1.0 {
-        Ok(())
-    } else {
-        Err(Error::Model(tracker_model::Error::InvalidParameter {
-            name,
-            reason: format!("{v} must lie strictly between 0 and 1"),
-        }))
-    }
-}
-
-fn check_positive(v: f64, name: &'static str) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::Model(tracker_model::Error::InvalidParameter {
-            name,
-            reason: format!("{v} must be finite and > 0"),
-        }))
-    }
-}
-
 impl McmcdaConfig {
     /// Checks every field. Probabilities must lie strictly inside (0, 1) and rates must be
     /// positive: these are the conditions of the paper's Theorem 4 (ergodicity), and they keep
     /// every logarithm finite.
     pub fn check(&self) -> Result<Model> {
-        check_positive(self.volume, "volume")?;
-        check_positive(self.births_per_scan, "births_per_scan")?;
-        check_positive(self.clutter_per_scan, "clutter_per_scan")?;
-        check_probability_open(self.p_disappear, "p_disappear")?;
-        check_probability_open(self.p_detect, "p_detect")?;
-        check_probability_open(self.stop_probability, "stop_probability")?;
-        check_positive(self.max_speed, "max_speed")?;
+        ensure_positive(self.volume, "volume")?;
+        ensure_positive(self.births_per_scan, "births_per_scan")?;
+        ensure_positive(self.clutter_per_scan, "clutter_per_scan")?;
+        ensure_open_probability(self.p_disappear, "p_disappear")?;
+        ensure_open_probability(self.p_detect, "p_detect")?;
+        ensure_open_probability(self.stop_probability, "stop_probability")?;
+        ensure_positive(self.max_speed, "max_speed")?;
         if !(0.0..=1.0).contains(&self.head_probability) {
             return Err(Error::Invalid(format!(
                 "head_probability {} must lie in [0, 1]",
@@ -272,7 +253,7 @@ impl McmcdaConfig {
             TrackInit::FirstMeasurement {
                 velocity_variance: Some(v),
             } => {
-                check_positive(v, "velocity_variance")?;
+                ensure_positive(v, "velocity_variance")?;
                 v
             }
             TrackInit::FirstMeasurement {

@@ -1,7 +1,6 @@
 //! From a partition to what users want: smoothed trajectories, and per-scan labels of the
 //! measurements for association scoring.
 
-use nalgebra::{Matrix4, Vector4};
 use tracker_model::{
     Gaussian, LinearObservation, Track, TrackId, TrackPoint, TrackSet, filter, smooth,
 };
@@ -26,7 +25,6 @@ pub fn smoothed_tracks(
         crate::TrackInit::FirstMeasurement { .. } => model.initial_velocity_variance,
         crate::TrackInit::TwoPoint { .. } => cfg.max_speed * cfg.max_speed / 3.0,
     };
-    let r = cfg.measurement_noise;
     let mut out = Vec::with_capacity(tracks.len());
     for (i, track) in tracks.iter().enumerate() {
         let (Some(&first), Some(&last)) = (track.first(), track.last()) else {
@@ -37,16 +35,9 @@ pub fn smoothed_tracks(
         for &m in &track[1..] {
             zs[problem.scan_of(m) - t0] = Some(problem.position(m));
         }
-        let y = problem.position(first);
-        #[rustfmt::skip]
-        let cov = Matrix4::new(
-            r[(0, 0)], r[(0, 1)], 0.0, 0.0,
-            r[(1, 0)], r[(1, 1)], 0.0, 0.0,
-            0.0, 0.0, v, 0.0,
-            0.0, 0.0, 0.0, v,
-        );
         // The first step has no measurement: its filtered state is this start.
-        let start = Gaussian::new(Vector4::new(y.x, y.y, 0.0, 0.0), cov)?;
+        let (mean, cov) = model.start_at(problem.position(first), v);
+        let start = Gaussian::new(mean, cov)?;
         let run = filter(&cfg.motion, &sensor, &start, &zs)?;
         let states = smooth(&cfg.motion, &run)?;
         let points = states

@@ -190,7 +190,7 @@ fn greedy(pairs: &mut [(f64, usize, usize, Node)], n_tracks: usize, n_meas: usiz
     out
 }
 
-/// Minimum-cost assignment over the gated pairs.
+/// Minimum-cost assignment over the gated pairs (tracker-model's solver).
 fn optimal(
     pairs: &[(f64, usize, usize, Node)],
     n_tracks: usize,
@@ -207,14 +207,13 @@ fn optimal(
         costs[k * n_meas + j] = c;
         index[k * n_meas + j] = p;
     }
-    let (rows, cols) = lsap::solve(n_tracks, n_meas, &costs, false)
-        .map_err(|e| Error::Invalid(format!("assignment failed: {e:?}")))?;
-    Ok(rows
-        .into_iter()
-        .zip(cols)
-        .map(|(k, j)| index[k * n_meas + j])
-        .filter(|&p| p != usize::MAX)
-        .collect())
+    Ok(
+        tracker_model::assignment::minimise(n_tracks, n_meas, &costs)?
+            .into_iter()
+            .map(|(k, j)| index[k * n_meas + j])
+            .filter(|&p| p != usize::MAX)
+            .collect(),
+    )
 }
 
 /// The greedy NNF partition of the window, ready to start a chain.

@@ -3,7 +3,7 @@
 //! with each track filtered by tracker-model's general Kalman filter, and the enumeration of
 //! every feasible partition of a tiny problem.
 
-use nalgebra::{Matrix4, Vector4};
+use nalgebra::Vector4;
 use tracker_model::{Gaussian, LinearObservation, ObservationModel, TransitionModel};
 
 use crate::config::{Model, TrackEnd, TrackInit};
@@ -101,27 +101,8 @@ fn track_log_likelihood(
     let y1 = problem.position(track[0]);
     let mut state = match cfg.track_init {
         TrackInit::FirstMeasurement { .. } => {
-            let v = model.initial_velocity_variance;
-            let r = cfg.measurement_noise;
-            let cov = Matrix4::new(
-                r[(0, 0)],
-                r[(0, 1)],
-                0.0,
-                0.0,
-                r[(1, 0)],
-                r[(1, 1)],
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-                v,
-                0.0,
-                0.0,
-                0.0,
-                0.0,
-                v,
-            );
-            Gaussian::new(Vector4::new(y1.x, y1.y, 0.0, 0.0), cov)?
+            let (mean, cov) = model.start_at(y1, model.initial_velocity_variance);
+            Gaussian::new(mean, cov)?
         }
         TrackInit::TwoPoint { initial_covariance } => {
             let y2 = problem.position(track[1]);

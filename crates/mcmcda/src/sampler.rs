@@ -57,6 +57,7 @@ pub struct Chain<'a, R> {
     stats: MoveStats,
     candidates: Vec<MeasId>,
     grown: Vec<MeasId>,
+    from: Vec<MeasId>,
     /// Tests force acceptance to check that every move's reverse restores ω.
     #[cfg(test)]
     pub(crate) force_accept: bool,
@@ -79,6 +80,7 @@ impl<'a, R: Rng> Chain<'a, R> {
             stats: MoveStats::default(),
             candidates: Vec::new(),
             grown: Vec::new(),
+            from: Vec::new(),
             #[cfg(test)]
             force_accept: false,
             #[cfg(test)]
@@ -344,8 +346,10 @@ impl<'a, R: Rng> Chain<'a, R> {
             End::Tail
         };
         let old = self.state.remove(victim);
-        // Work in growth order: from the kept end outwards.
-        let mut from = old.meas.clone();
+        // Work in growth order: from the kept end outwards (a reused buffer).
+        let mut from = std::mem::take(&mut self.from);
+        from.clear();
+        from.extend_from_slice(&old.meas);
         if end == End::Head {
             from.reverse();
         }
@@ -383,11 +387,13 @@ impl<'a, R: Rng> Chain<'a, R> {
             }
             _ => false,
         };
+        let unchanged = self.grown == from;
+        self.from = from;
         if !proposed {
             self.state.reinsert(old);
             return Outcome::Rejected;
         }
-        if self.grown == from {
+        if unchanged {
             self.state.reinsert(old);
             return Outcome::Accepted;
         }

@@ -6,7 +6,9 @@
 use nalgebra::{Matrix4, Vector2, Vector4};
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
-use tracker_model::{Gaussian, LinearObservation, ObservationModel};
+use tracker_model::{
+    Gaussian, LinearObservation, ObservationModel, ensure_open_probability, ensure_positive,
+};
 
 use crate::error::{Error, Result};
 
@@ -63,18 +65,9 @@ struct Edge {
 }
 
 fn check(config: &SingleScanConfig, measurements: &[Vector2<f64>]) -> Result<()> {
-    let p = config.p_detect;
-    if !(p.is_finite() && p > 0.0 && p < 1.0) {
-        return Err(Error::Invalid(format!("p_detect {p} must lie in (0, 1)")));
-    }
-    for (name, v) in [
-        ("clutter_density", config.clutter_density),
-        ("gate", config.gate),
-    ] {
-        if !(v.is_finite() && v > 0.0) {
-            return Err(Error::Invalid(format!("{name} {v} must be finite and > 0")));
-        }
-    }
+    ensure_open_probability(config.p_detect, "p_detect")?;
+    ensure_positive(config.clutter_density, "clutter_density")?;
+    ensure_positive(config.gate, "gate")?;
     if !(0.0..1.0).contains(&config.laziness) {
         return Err(Error::Invalid(format!(
             "laziness {} must lie in [0, 1)",

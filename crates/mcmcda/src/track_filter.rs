@@ -22,17 +22,24 @@ pub(crate) struct Node {
 const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
 impl Model {
+    /// A track starting at position `y`: mean [y, 0], covariance diag(R, v I) with per-axis
+    /// velocity variance `v`.
+    pub(crate) fn start_at(&self, y: Vector2<f64>, v: f64) -> (Vector4<f64>, Matrix4<f64>) {
+        let mut cov = Matrix4::zeros();
+        cov.fixed_view_mut::<2, 2>(0, 0)
+            .copy_from(&self.config.measurement_noise);
+        cov[(2, 2)] = v;
+        cov[(3, 3)] = v;
+        (Vector4::new(y.x, y.y, 0.0, 0.0), cov)
+    }
+
     pub(crate) fn first_node(&self, problem: &Problem, meas: &[MeasId]) -> Node {
         let y1 = problem.position(meas[0]);
-        let r = self.config.measurement_noise;
         match self.config.track_init {
             TrackInit::FirstMeasurement { .. } => {
-                let mut cov = Matrix4::zeros();
-                cov.fixed_view_mut::<2, 2>(0, 0).copy_from(&r);
-                cov[(2, 2)] = self.initial_velocity_variance;
-                cov[(3, 3)] = self.initial_velocity_variance;
+                let (mean, cov) = self.start_at(y1, self.initial_velocity_variance);
                 Node {
-                    mean: Vector4::new(y1.x, y1.y, 0.0, 0.0),
+                    mean,
                     cov,
                     cum_log_likelihood: 0.0,
                 }

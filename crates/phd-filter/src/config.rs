@@ -4,7 +4,7 @@
 //! measurement is a box z = [c_x, c_y, w, h].
 
 use serde::{Deserialize, Serialize};
-use tracker_model::BoundingBox;
+use tracker_model::{BoundingBox, ensure_open_probability, ensure_positive};
 
 use crate::error::{Error, Result};
 
@@ -93,58 +93,38 @@ impl Default for PhdConfig {
     }
 }
 
-fn positive(v: f64, name: &str) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::Invalid(format!(
-            "{name} is {v}; it must be finite and > 0"
-        )))
-    }
-}
-
-fn probability(v: f64, name: &str) -> Result<()> {
-    if v.is_finite() && v > 0.0 && v < 1.0 {
-        Ok(())
-    } else {
-        Err(Error::Invalid(format!(
-            "{name} is {v}; it must lie in (0, 1)"
-        )))
-    }
-}
-
 impl PhdConfig {
     /// Checks every field.
     pub fn check(&self) -> Result<()> {
-        probability(self.p_survive, "p_survive")?;
-        probability(self.p_detect, "p_detect")?;
-        positive(self.clutter_rate, "clutter_rate")?;
-        positive(self.measurement_volume, "measurement_volume")?;
-        positive(self.birth_rate, "birth_rate")?;
-        for (i, s) in self.measurement_std.iter().enumerate() {
-            positive(*s, &format!("measurement_std[{i}]"))?;
+        ensure_open_probability(self.p_survive, "p_survive")?;
+        ensure_open_probability(self.p_detect, "p_detect")?;
+        ensure_positive(self.clutter_rate, "clutter_rate")?;
+        ensure_positive(self.measurement_volume, "measurement_volume")?;
+        ensure_positive(self.birth_rate, "birth_rate")?;
+        for s in &self.measurement_std {
+            ensure_positive(*s, "measurement_std")?;
         }
         match self.motion {
             Motion::RandomWalk {
                 position_std,
                 size_std,
             } => {
-                positive(position_std, "position_std")?;
-                positive(size_std, "size_std")?;
+                ensure_positive(position_std, "position_std")?;
+                ensure_positive(size_std, "size_std")?;
             }
             Motion::ConstantVelocity {
                 acceleration_std,
                 size_std,
             } => {
-                positive(acceleration_std, "acceleration_std")?;
-                positive(size_std, "size_std")?;
+                ensure_positive(acceleration_std, "acceleration_std")?;
+                ensure_positive(size_std, "size_std")?;
             }
         }
-        positive(self.birth_velocity_std, "birth_velocity_std")?;
+        ensure_positive(self.birth_velocity_std, "birth_velocity_std")?;
         if self.particles_per_target == 0 || self.birth_particles == 0 || self.max_particles == 0 {
             return Err(Error::Invalid("particle counts must be > 0".into()));
         }
-        positive(self.extraction_threshold, "extraction_threshold")?;
+        ensure_positive(self.extraction_threshold, "extraction_threshold")?;
         if !(0.0..=1.0).contains(&self.label_min_share) {
             return Err(Error::Invalid(format!(
                 "label_min_share is {}; it must lie in [0, 1]",

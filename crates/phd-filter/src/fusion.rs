@@ -9,10 +9,10 @@
 //!   (1 − p_FA)(1 − P)). A detector whose confidence falls to the removal level is dropped.
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{BoundingBox, Frame, LocalDetector};
+use tracker_model::{BoundingBox, Frame, LocalDetector, ensure_in_range, ensure_open_probability};
 
 use crate::config::measurement_from_box;
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// Parameters of fusion and local-detector management; defaults are the seed's.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -63,22 +63,14 @@ impl FusionConfig {
             ("confirm_iou", self.confirm_iou),
             ("removal_confidence", self.removal_confidence),
         ] {
-            if !(0.0..=1.0).contains(&v) {
-                return Err(Error::Invalid(format!(
-                    "{name} is {v}; it must lie in [0, 1]"
-                )));
-            }
+            ensure_in_range(v, 0.0, 1.0, name)?;
         }
         for (name, v) in [
             ("p_detect", self.p_detect),
             ("p_false_alarm", self.p_false_alarm),
             ("initial_confidence", self.initial_confidence),
         ] {
-            if !(v > 0.0 && v < 1.0) {
-                return Err(Error::Invalid(format!(
-                    "{name} is {v}; it must lie in (0, 1)"
-                )));
-            }
+            ensure_open_probability(v, name)?;
         }
         Ok(())
     }

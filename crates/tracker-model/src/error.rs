@@ -55,8 +55,8 @@ pub enum Error {
 /// Result with tracker-model's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
-/// Checks that `value` is a probability in the closed interval [lo, hi] ⊆ [0, 1].
-pub(crate) fn ensure_in_range(value: f64, lo: f64, hi: f64, name: &'static str) -> Result<f64> {
+/// Checks that `value` is finite and in the closed interval [lo, hi].
+pub fn ensure_in_range(value: f64, lo: f64, hi: f64, name: &'static str) -> Result<f64> {
     if value.is_finite() && value >= lo && value <= hi {
         Ok(value)
     } else {
@@ -68,13 +68,25 @@ pub(crate) fn ensure_in_range(value: f64, lo: f64, hi: f64, name: &'static str) 
 }
 
 /// Checks that `value` is finite and strictly positive.
-pub(crate) fn ensure_positive(value: f64, name: &'static str) -> Result<f64> {
+pub fn ensure_positive(value: f64, name: &'static str) -> Result<f64> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
         Err(Error::InvalidParameter {
             name,
             reason: format!("{value} must be finite and > 0"),
+        })
+    }
+}
+
+/// Checks that `value` is a probability strictly inside (0, 1).
+pub fn ensure_open_probability(value: f64, name: &'static str) -> Result<f64> {
+    if value.is_finite() && value > 0.0 && value < 1.0 {
+        Ok(value)
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            reason: format!("{value} must lie strictly between 0 and 1"),
         })
     }
 }

@@ -16,6 +16,7 @@
 //!   [`TrackSet`] output type that every tracker returns and every metric reads.
 //! * The MCMCDA scenario [`SimulationConfig`] → [`Simulator`] (Oh, Russell & Sastry, TAC 2009).
 //! * MOTChallenge rows: [`parse_mot`], [`format_mot`], conversions to and from [`TrackSet`].
+//! * [`assignment`]: optimal one-to-one matching (SciPy's solver, via `lsap`).
 //! * [`LocalDetector`] / [`LocalDetectorFactory`]: the interface of per-object detectors
 //!   trained online, shared by trackers (phd-filter) and detectors (sensors-video).
 //!
@@ -23,6 +24,7 @@
 //! covariance; a failed factorisation is an [`Error`], never a panic; randomness comes only from
 //! the generator the caller passes in.
 
+pub mod assignment;
 mod consistency;
 mod detector;
 mod error;
@@ -40,7 +42,7 @@ mod tests;
 
 pub use consistency::{anees_interval_95, chi_square_quantile_wh};
 pub use detector::{LocalDetector, LocalDetectorFactory};
-pub use error::{Error, Result};
+pub use error::{Error, Result, ensure_in_range, ensure_open_probability, ensure_positive};
 pub use gaussian::{
     CholeskyFactor, Gaussian, LN_2PI, check_finite_matrix, check_positive_semidefinite,
     check_symmetric, cholesky_checked,
