@@ -1,36 +1,23 @@
 //! `cargo xtask eval --gt GT.txt --pred PRED.txt`: scores a tracker's MOTChallenge output
 //! against MOTChallenge ground truth with every sequence-level metric of eval-metrics.
 
-use std::fs::File;
-use std::io::BufReader;
 use std::path::Path;
 
 use anyhow::{Context, Result};
 use eval_metrics::{EvalConfig, EvalReport, MatchConfig, evaluate};
-use tracker_model::{MotRow, TrackSet, parse_mot};
+use scenarios::mot::parse_evaluation_pair;
+use scenarios::{Table, fmt_num};
+use tracker_model::TrackSet;
 
-use crate::Outcome;
-use crate::report::{Table, fmt_num};
+use crate::report::to_markdown;
+use crate::{Outcome, read_file};
 
-/// Reads a MOTChallenge file; errors name the file and line.
-fn read_rows(path: &Path) -> Result<Vec<MotRow>> {
-    let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
-    parse_mot(BufReader::new(file))
-        .with_context(|| format!("{} is not a valid MOTChallenge file", path.display()))
-}
-
-/// Ground truth rows with confidence 0 are "ignore" annotations in MOTChallenge and are
-/// dropped, as TrackEval does before matching (its distractor-class handling is not applied).
-pub(crate) fn load(gt: &Path, pred: &Path) -> Result<(TrackSet, TrackSet)> {
-    let gt_rows: Vec<MotRow> = read_rows(gt)?
-        .into_iter()
-        .filter(|r| r.confidence != 0.0)
-        .collect();
-    let gt_set =
-        TrackSet::from_mot_rows(&gt_rows).with_context(|| format!("in {}", gt.display()))?;
-    let pred_set = TrackSet::from_mot_rows(&read_rows(pred)?)
-        .with_context(|| format!("in {}", pred.display()))?;
-    Ok((gt_set, pred_set))
+/// Reads ground truth and tracker output (see `parse_evaluation_pair` for the conventions).
+fn load(gt: &Path, pred: &Path) -> Result<(TrackSet, TrackSet)> {
+    parse_evaluation_pair(
+        (&read_file(gt)?, &gt.display().to_string()),
+        (&read_file(pred)?, &pred.display().to_string()),
+    )
 }
 
 /// The report as (metric, value) rows, in the order the table shows them.
@@ -99,7 +86,7 @@ pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool) -> Outcome {
         for (name, value) in rows(&report) {
             table.row(vec![name.to_string(), value]);
         }
-        println!("{}", table.to_markdown());
+        println!("{}", to_markdown(&table));
     }
     Ok(true)
 }

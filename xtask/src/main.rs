@@ -12,7 +12,6 @@ use clap::{Parser, Subcommand};
 
 mod ci;
 mod eval;
-mod pipelines;
 mod plot;
 mod report;
 mod scenario;
@@ -50,9 +49,9 @@ enum Command {
     Ci,
     /// Track MOTChallenge detections (box centres as points) and write MOTChallenge tracks.
     Track {
-        /// The tracker.
-        #[arg(long, value_enum)]
-        tracker: track::Tracker,
+        /// The tracker: mcmcda, gnn or phd.
+        #[arg(long)]
+        tracker: scenarios::track::Tracker,
         /// Detections (frame,id,left,top,width,height,conf,...).
         #[arg(long)]
         input: PathBuf,
@@ -131,3 +130,9 @@ fn workspace_root() -> PathBuf {
 
 /// Result of a task: `Ok(true)` when everything passed.
 type Outcome = Result<bool>;
+
+/// A file's text; the error names the file.
+fn read_file(path: &std::path::Path) -> Result<String> {
+    use anyhow::Context;
+    std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))
+}

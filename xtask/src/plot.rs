@@ -1,54 +1,9 @@
-//! Small SVG charts with plotters: every plot in the report is a set of labelled series drawn
-//! as lines or markers on one pair of axes.
+//! The plot backend: renders a pipeline's `scenarios::Chart` (labelled series drawn as lines
+//! or markers on one pair of axes) to SVG with plotters.
 
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
-
-/// How a series is drawn.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Style {
-    /// A polyline through the points.
-    Line,
-    /// A dashed-looking thin line (drawn lighter).
-    ThinLine,
-    /// Small circles.
-    Markers,
-}
-
-/// One labelled series.
-#[derive(Debug, Clone)]
-pub struct Series {
-    /// Legend label; empty for no legend entry.
-    pub label: String,
-    /// The points.
-    pub points: Vec<(f64, f64)>,
-    /// How to draw it.
-    pub style: Style,
-    /// Palette index (same index, same colour).
-    pub colour: usize,
-}
-
-impl Series {
-    /// A series from its parts.
-    pub fn new(label: &str, points: Vec<(f64, f64)>, style: Style, colour: usize) -> Self {
-        Self {
-            label: label.to_string(),
-            points,
-            style,
-            colour,
-        }
-    }
-}
-
-/// A chart's title and axis labels.
-pub struct Axes<'a> {
-    /// Title above the chart.
-    pub title: &'a str,
-    /// x-axis label.
-    pub x: &'a str,
-    /// y-axis label.
-    pub y: &'a str,
-}
+use scenarios::{Chart, Style};
 
 /// Matplotlib's "tab10" colours: distinct on white and for most colour-blind readers.
 const PALETTE: [RGBColor; 8] = [
@@ -75,8 +30,9 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// Draws the series into an SVG document of 760×520 pixels.
-pub fn chart(axes: &Axes<'_>, series: &[Series]) -> Result<String> {
+/// Draws the chart into an SVG document of 760×520 pixels.
+pub fn render(chart: &Chart) -> Result<String> {
+    let (axes, series) = (&chart.axes, &chart.series);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (760, 520)).into_drawing_area();
@@ -85,7 +41,7 @@ pub fn chart(axes: &Axes<'_>, series: &[Series]) -> Result<String> {
         let (x0, x1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
         let (y0, y1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
         let mut chart = ChartBuilder::on(&root)
-            .caption(axes.title, ("sans-serif", 18))
+            .caption(&axes.title, ("sans-serif", 18))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(60)
@@ -93,8 +49,8 @@ pub fn chart(axes: &Axes<'_>, series: &[Series]) -> Result<String> {
             .map_err(|e| to_err(&e))?;
         chart
             .configure_mesh()
-            .x_desc(axes.x)
-            .y_desc(axes.y)
+            .x_desc(&axes.x)
+            .y_desc(&axes.y)
             .light_line_style(WHITE.mix(0.0))
             .draw()
             .map_err(|e| to_err(&e))?;

@@ -6,131 +6,64 @@ use std::fs;
 use std::path::Path;
 
 use anyhow::{Context, bail};
+use scenarios::Table;
 
-use crate::Outcome;
 use crate::scenario::{self, RunResult};
+use crate::{Outcome, plot};
 
-/// A report section, one per scenario.
-#[derive(Debug, Clone, Default)]
-pub struct Section {
-    /// Heading.
-    pub title: String,
-    /// A paragraph of Markdown-free text: what is shown and how to read it.
-    pub summary: String,
-    /// Tables in order.
-    pub tables: Vec<Table>,
-    /// Plots in order.
-    pub plots: Vec<Plot>,
-}
-
-/// A table of already-formatted cells.
-#[derive(Debug, Clone, Default)]
-pub struct Table {
-    /// Caption.
-    pub caption: String,
-    /// Column headers.
-    pub header: Vec<String>,
-    /// Rows; each as long as the header.
-    pub rows: Vec<Vec<String>>,
-}
-
-impl Table {
-    /// A table with the given caption and header.
-    pub fn new(caption: &str, header: &[&str]) -> Self {
-        Self {
-            caption: caption.to_string(),
-            header: header.iter().map(|h| h.to_string()).collect(),
-            rows: Vec::new(),
-        }
-    }
-
-    /// Appends a row.
-    pub fn row(&mut self, cells: Vec<String>) {
-        self.rows.push(cells);
-    }
-
-    /// The table as Markdown (also readable as plain text on a terminal).
-    pub fn to_markdown(&self) -> String {
-        let widths: Vec<usize> = (0..self.header.len())
-            .map(|c| {
-                self.rows
-                    .iter()
-                    .filter_map(|r| r.get(c))
-                    .chain(std::iter::once(&self.header[c]))
-                    .map(|s| s.chars().count())
-                    .max()
-                    .unwrap_or(0)
-            })
-            .collect();
-        let line = |cells: &[String]| {
-            let padded: Vec<String> = cells
+/// A table as Markdown (also readable as plain text on a terminal).
+pub fn to_markdown(table: &Table) -> String {
+    let widths: Vec<usize> = (0..table.header.len())
+        .map(|c| {
+            table
+                .rows
                 .iter()
-                .zip(&widths)
-                .map(|(c, w)| format!("{c:<w$}"))
-                .collect();
-            format!("| {} |\n", padded.join(" | "))
-        };
-        let mut out = format!("**{}**\n\n", self.caption);
-        out += &line(&self.header);
-        let rule: Vec<String> = widths.iter().map(|w| "-".repeat(*w)).collect();
-        out += &line(&rule);
-        for r in &self.rows {
-            out += &line(r);
-        }
-        out
+                .filter_map(|r| r.get(c))
+                .chain(std::iter::once(&table.header[c]))
+                .map(|s| s.chars().count())
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let line = |cells: &[String]| {
+        let padded: Vec<String> = cells
+            .iter()
+            .zip(&widths)
+            .map(|(c, w)| format!("{c:<w$}"))
+            .collect();
+        format!("| {} |\n", padded.join(" | "))
+    };
+    let mut out = format!("**{}**\n\n", table.caption);
+    out += &line(&table.header);
+    let rule: Vec<String> = widths.iter().map(|w| "-".repeat(*w)).collect();
+    out += &line(&rule);
+    for r in &table.rows {
+        out += &line(r);
     }
+    out
+}
 
-    fn to_html(&self) -> String {
-        let esc = html_escape;
-        let mut out = format!("<table>\n<caption>{}</caption>\n<tr>", esc(&self.caption));
-        for h in &self.header {
-            let _ = write!(out, "<th>{}</th>", esc(h));
+fn to_html(table: &Table) -> String {
+    let esc = html_escape;
+    let mut out = format!("<table>\n<caption>{}</caption>\n<tr>", esc(&table.caption));
+    for h in &table.header {
+        let _ = write!(out, "<th>{}</th>", esc(h));
+    }
+    out += "</tr>\n";
+    for r in &table.rows {
+        out += "<tr>";
+        for c in r {
+            let _ = write!(out, "<td>{}</td>", esc(c));
         }
         out += "</tr>\n";
-        for r in &self.rows {
-            out += "<tr>";
-            for c in r {
-                let _ = write!(out, "<td>{}</td>", esc(c));
-            }
-            out += "</tr>\n";
-        }
-        out + "</table>\n"
     }
-}
-
-/// An SVG plot.
-#[derive(Debug, Clone)]
-pub struct Plot {
-    /// File stem (unique within the section).
-    pub name: String,
-    /// Caption.
-    pub caption: String,
-    /// The SVG document.
-    pub svg: String,
+    out + "</table>\n"
 }
 
 fn html_escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
-}
-
-/// Formats a number for a table: 4 significant digits, plain or scientific.
-pub fn fmt_num(v: f64) -> String {
-    if v.fract() == 0.0 && v.abs() < 1e9 {
-        // Counts and other whole numbers print as integers.
-        return format!("{v:.0}");
-    }
-    if v == 0.0 || (1e-3..1e5).contains(&v.abs()) {
-        let digits = if v == 0.0 {
-            0
-        } else {
-            (3 - v.abs().log10().floor() as i32).max(0)
-        };
-        format!("{v:.prec$}", prec = digits as usize)
-    } else {
-        format!("{v:.3e}")
-    }
 }
 
 /// `cargo xtask report`.
@@ -148,7 +81,7 @@ pub fn run(out_dir: &Path, filter: Option<&str>) -> Outcome {
         if let Ok(out) = &r.output {
             println!("\n## {}\n", out.section.title);
             for t in &out.section.tables {
-                println!("{}", t.to_markdown());
+                println!("{}", to_markdown(t));
             }
         }
     }
@@ -198,19 +131,20 @@ fn write(out_dir: &Path, results: &[RunResult]) -> anyhow::Result<()> {
                     html_escape(&s.summary)
                 );
                 for t in &s.tables {
-                    md += &t.to_markdown();
+                    md += &to_markdown(t);
                     md += "\n";
-                    html += &t.to_html();
+                    html += &to_html(t);
                 }
-                for p in &s.plots {
+                for p in &s.figures {
+                    let svg = plot::render(&p.chart)?;
                     let file = format!("{name}-{}.svg", p.name);
-                    fs::write(out_dir.join(&file), &p.svg)
+                    fs::write(out_dir.join(&file), &svg)
                         .with_context(|| format!("writing {file}"))?;
                     let _ = write!(md, "![{}]({file})\n\n*{}*\n\n", p.caption, p.caption);
                     let _ = writeln!(
                         html,
                         "<figure>{}<figcaption>{}</figcaption></figure>",
-                        p.svg,
+                        svg,
                         html_escape(&p.caption)
                     );
                 }

@@ -9,23 +9,17 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, anyhow, bail};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use serde::de::DeserializeOwned;
+use scenarios::{Clock, Env, Inputs, Metrics, Progress, Run};
 use serde::{Deserialize, Serialize};
 
-use crate::report::Section;
-use crate::{Outcome, pipelines, workspace_root};
-
-/// Metric name → value, sorted so that expected files diff cleanly.
-pub type Metrics = BTreeMap<String, f64>;
+use crate::{Outcome, read_file, workspace_root};
 
 /// One scenario file.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ScenarioFile {
-    /// Which pipeline runs it (see `pipelines::PIPELINES`).
+    /// Which pipeline runs it (see `scenarios::pipeline_names`).
     pub pipeline: String,
     /// Seed of the scenario's generator.
     pub seed: u64,
@@ -89,28 +83,35 @@ pub struct Scenario {
     pub file: ScenarioFile,
 }
 
-impl Scenario {
-    /// The pipeline's parameters as its own config type; unknown keys are errors.
-    pub fn params<P: DeserializeOwned>(&self) -> Result<P> {
-        toml::Value::Table(self.file.params.clone())
-            .try_into()
-            .with_context(|| format!("scenario {}: bad [params]", self.name))
+/// Progress bars of the suite, one per scenario.
+struct Bar(ProgressBar);
+
+impl Progress for Bar {
+    fn set_length(&self, units: u64) {
+        self.0.set_length(units);
     }
 
-    /// The scenario's generator, seeded from the file. Pipelines that run work in parallel give
-    /// each task its own stream of this seed (`set_stream`), so results do not depend on the
-    /// number of threads.
-    pub fn rng(&self) -> ChaCha8Rng {
-        ChaCha8Rng::seed_from_u64(self.file.seed)
+    fn advance(&self, units: u64) {
+        self.0.inc(units);
     }
 }
 
-/// What a pipeline produces: metrics for the regression check, a section for the report.
-pub struct PipelineOutput {
-    /// The metrics compared with the expected file.
-    pub metrics: Metrics,
-    /// Tables and plots for the report.
-    pub section: Section,
+/// Wall-clock time since the first reading.
+struct WallClock(Instant);
+
+impl Clock for WallClock {
+    fn now_s(&self) -> f64 {
+        self.0.elapsed().as_secs_f64()
+    }
+}
+
+/// Input files named in scenario files are relative to the workspace root.
+struct WorkspaceFiles;
+
+impl Inputs for WorkspaceFiles {
+    fn read_to_string(&self, path: &str) -> Result<String> {
+        read_file(&workspace_root().join(path))
+    }
 }
 
 /// A finished scenario run.
@@ -118,7 +119,7 @@ pub struct RunResult {
     /// The scenario.
     pub scenario: Scenario,
     /// Its output, or the error that stopped it.
-    pub output: Result<PipelineOutput>,
+    pub output: Result<Run>,
     /// Wall time.
     pub elapsed: Duration,
 }
@@ -163,12 +164,12 @@ fn load_file(path: &Path) -> Result<ScenarioFile> {
     let text = fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
     let file: ScenarioFile =
         toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    if pipelines::find(&file.pipeline).is_none() {
+    if !scenarios::is_pipeline(&file.pipeline) {
         bail!(
             "{}: unknown pipeline {:?}; known: {}",
             path.display(),
             file.pipeline,
-            pipelines::names().join(", ")
+            scenarios::pipeline_names().join(", ")
         );
     }
     Ok(file)
@@ -187,20 +188,18 @@ pub fn run_all(scenarios: Vec<Scenario>) -> Vec<RunResult> {
     scenarios
         .into_par_iter()
         .map(|scenario| {
-            let bar = multi.add(ProgressBar::new(1).with_style(style.clone()));
-            bar.set_prefix(scenario.name.clone());
+            let bar = Bar(multi.add(ProgressBar::new(1).with_style(style.clone())));
+            bar.0.set_prefix(scenario.name.clone());
             let start = Instant::now();
-            let output = match pipelines::find(&scenario.file.pipeline) {
-                Some(run) => run(&scenario, &bar),
-                None => Err(anyhow!("unknown pipeline {}", scenario.file.pipeline)),
-            }
-            .and_then(
-                |out| match out.metrics.iter().find(|(_, v)| !v.is_finite()) {
-                    Some((k, v)) => Err(anyhow!("metric {k} is not finite ({v})")),
-                    None => Ok(out),
-                },
-            );
-            bar.finish_and_clear();
+            let file = &scenario.file;
+            let output = scenarios::run_pipeline(
+                &file.pipeline,
+                &file.params,
+                file.seed,
+                &Env::new(&bar, &WorkspaceFiles, &WallClock(start)),
+            )
+            .with_context(|| format!("scenario {}", scenario.name));
+            bar.0.finish_and_clear();
             RunResult {
                 scenario,
                 output,
@@ -211,7 +210,7 @@ pub fn run_all(scenarios: Vec<Scenario>) -> Vec<RunResult> {
 }
 
 /// Compares metrics with the expected file; returns the problems found (empty = pass).
-pub fn compare(scenario: &Scenario, metrics: &Metrics) -> Result<Vec<String>> {
+fn compare(scenario: &Scenario, metrics: &Metrics) -> Result<Vec<String>> {
     let path = expected_path(&scenario.name);
     let text = match fs::read_to_string(&path) {
         Ok(text) => text,
@@ -246,7 +245,7 @@ pub fn compare(scenario: &Scenario, metrics: &Metrics) -> Result<Vec<String>> {
 }
 
 /// Writes the expected file of a scenario (sorted keys, pretty JSON).
-pub fn bless(scenario: &Scenario, metrics: &Metrics) -> Result<()> {
+fn bless(scenario: &Scenario, metrics: &Metrics) -> Result<()> {
     #[derive(Serialize)]
     #[serde(transparent)]
     struct Sorted<'a>(&'a Metrics);

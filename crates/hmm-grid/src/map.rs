@@ -5,7 +5,7 @@
 use std::collections::VecDeque;
 
 use serde::{Deserialize, Serialize};
-use tracker_model::Point2;
+use tracker_model::{Frame, Point2, Track, TrackId, TrackPoint};
 
 use crate::error::{Error, Result};
 use crate::model::{Transitions, check_row};
@@ -166,6 +166,37 @@ impl StateSpace {
             .get(row * n_cols + col)
             .copied()
             .flatten()
+    }
+
+    /// The track of a state path (as returned by [`viterbi`](crate::viterbi) or
+    /// [`posterior_decode`](crate::posterior_decode)): one point per time step, at the state's
+    /// position, step t at frame `first_frame + t`, with no velocity or covariance. An empty
+    /// path gives an empty track. Errors if a state is outside 0..N or the frames overflow.
+    pub fn path_to_track(&self, path: &[usize], first_frame: Frame, id: TrackId) -> Result<Track> {
+        let n = self.n_states();
+        let points = path
+            .iter()
+            .enumerate()
+            .map(|(t, &s)| {
+                if s >= n {
+                    return Err(Error::InvalidParameter {
+                        name: "state path",
+                        reason: format!("step {t} is state {s}, but the map has {n} states"),
+                    });
+                }
+                let frame = Frame::try_from(t)
+                    .ok()
+                    .and_then(|t| first_frame.checked_add(t))
+                    .ok_or_else(|| Error::InvalidParameter {
+                        name: "state path",
+                        reason: format!(
+                            "step {t} after first frame {first_frame} overflows the frame index"
+                        ),
+                    })?;
+                Ok(TrackPoint::at(frame, self.positions[s]))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        Ok(Track::from_points(id, points)?)
     }
 
     /// States reachable from `from` in at most `max_hops` hops, with their hop distance.

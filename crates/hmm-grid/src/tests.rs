@@ -6,7 +6,7 @@
 use approx::assert_relative_eq;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tracker_model::Point2;
+use tracker_model::{Point2, TrackId, TrackPoint};
 
 use crate::*;
 
@@ -476,4 +476,35 @@ fn maps_build_valid_models() {
         .is_err()
     );
     assert!(SpeedDistribution::new(vec![0.5, 0.6]).is_err());
+}
+
+#[test]
+fn state_paths_become_tracks() {
+    // Free cells of a 2×2 grid with (1, 0) blocked: state 0 = (0, 0) at (5, 5),
+    // state 1 = (0, 1) at (5, 15), state 2 = (1, 1) at (15, 15).
+    let space = StateSpace::from_grid(&CellGrid {
+        n_cols: 2,
+        n_rows: 2,
+        cell_size: 10.0,
+        blocked: vec![(1, 0)],
+    })
+    .unwrap();
+    let track = space.path_to_track(&[0, 1, 2, 2], 7, TrackId(3)).unwrap();
+    assert_eq!(track.id(), TrackId(3));
+    assert_eq!(
+        track.points(),
+        &[
+            TrackPoint::at(7, Point2::new(5.0, 5.0)),
+            TrackPoint::at(8, Point2::new(5.0, 15.0)),
+            TrackPoint::at(9, Point2::new(15.0, 15.0)),
+            TrackPoint::at(10, Point2::new(15.0, 15.0)),
+        ]
+    );
+    assert!(space.path_to_track(&[], 0, TrackId(0)).unwrap().is_empty());
+    let err = space.path_to_track(&[0, 3], 0, TrackId(0)).unwrap_err();
+    assert!(
+        matches!(&err, Error::InvalidParameter { name: "state path", reason } if reason.contains("step 1 is state 3")),
+        "{err}"
+    );
+    assert!(space.path_to_track(&[0, 0], u32::MAX, TrackId(0)).is_err());
 }

@@ -4,8 +4,8 @@
 use nalgebra::{Matrix2, Matrix4};
 use serde::{Deserialize, Serialize};
 use tracker_model::{
-    ConstantVelocity2, TransitionModel, check_positive_semidefinite, ensure_open_probability,
-    ensure_positive,
+    BoundingBox, ConstantVelocity2, TransitionModel, check_positive_semidefinite,
+    ensure_open_probability, ensure_positive,
 };
 
 use crate::error::{Error, Result};
@@ -187,6 +187,61 @@ impl Default for McmcdaConfig {
             },
             track_end: TrackEnd::Disappeared,
         }
+    }
+}
+
+impl McmcdaConfig {
+    /// A model for tracking the centres of detector boxes, scaled to the boxes themselves
+    /// (what `cargo xtask track` uses without a configuration file). Lengths follow the median
+    /// box width w: measurement σ = 0.1 w, speed ≤ w per frame, acceleration σ = 0.05 w per
+    /// frame², newborn velocity σ = 0.3 w; the region is the bounding rectangle of the box
+    /// centres (at least w on a side); a track ends when its target goes undetected
+    /// ([`TrackEnd::Undetected`]), with p_d = 0.8, 0.1 births and 1 false alarm per frame.
+    ///
+    /// ```
+    /// use mcmcda::McmcdaConfig;
+    /// use tracker_model::BoundingBox;
+    ///
+    /// let boxes = [BoundingBox::new(10.0, 20.0, 40.0, 90.0)?, BoundingBox::new(300.0, 25.0, 44.0, 95.0)?];
+    /// let config = McmcdaConfig::for_boxes(&boxes)?;
+    /// assert_eq!(config.max_speed, 44.0);
+    /// # Ok::<(), mcmcda::Error>(())
+    /// ```
+    pub fn for_boxes(boxes: &[BoundingBox]) -> Result<Self> {
+        let mut widths: Vec<f64> = boxes.iter().map(|b| b.width).collect();
+        widths.sort_by(f64::total_cmp);
+        let Some(&median) = widths.get(widths.len() / 2) else {
+            return Err(Error::Invalid(
+                "a model scaled to boxes needs at least one box".into(),
+            ));
+        };
+        let w = median.max(1.0);
+        let (mut lo, mut hi) = (
+            nalgebra::Vector2::repeat(f64::INFINITY),
+            nalgebra::Vector2::repeat(f64::NEG_INFINITY),
+        );
+        for b in boxes {
+            let c = b.centre();
+            lo = lo.inf(&c);
+            hi = hi.sup(&c);
+        }
+        let extent = hi - lo;
+        let volume = (extent.x.max(w) * extent.y.max(w)).max(1.0);
+        Ok(Self {
+            volume,
+            births_per_scan: 0.1,
+            clutter_per_scan: 1.0,
+            p_disappear: 0.01,
+            p_detect: 0.8,
+            motion: ConstantVelocity2::mcmcda(1.0, (0.05 * w).powi(2))?,
+            measurement_noise: Matrix2::identity() * (0.1 * w).powi(2),
+            max_speed: w,
+            track_init: TrackInit::FirstMeasurement {
+                velocity_variance: Some((0.3 * w).powi(2)),
+            },
+            track_end: TrackEnd::Undetected,
+            ..Self::default()
+        })
     }
 }
 

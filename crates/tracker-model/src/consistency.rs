@@ -1,5 +1,10 @@
 //! Filter-consistency checks: the χ² interval that an average NEES must fall in.
 
+/// The validation gate on a squared Mahalanobis distance in two dimensions that the trackers
+/// use by default: about the 99.9 % quantile of χ² with 2 degrees of freedom (−2 ln 0.001 =
+/// 13.82), so a true measurement falls outside it once in a thousand scans.
+pub const GATE_CHI2_2D: f64 = 13.8;
+
 /// The 97.5 % quantile of the standard normal distribution (published constant).
 const Z_975: f64 = 1.959_963_984_540_054;
 

@@ -67,6 +67,18 @@ pub fn ensure_in_range(value: f64, lo: f64, hi: f64, name: &'static str) -> Resu
     }
 }
 
+/// Checks that `value` is finite and not negative (zero allowed).
+pub fn ensure_non_negative(value: f64, name: &'static str) -> Result<f64> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::InvalidParameter {
+            name,
+            reason: format!("{value} must be finite and ≥ 0"),
+        })
+    }
+}
+
 /// Checks that `value` is finite and strictly positive.
 pub fn ensure_positive(value: f64, name: &'static str) -> Result<f64> {
     if value.is_finite() && value > 0.0 {

@@ -40,9 +40,11 @@ mod track;
 #[cfg(test)]
 mod tests;
 
-pub use consistency::{anees_interval_95, chi_square_quantile_wh};
+pub use consistency::{GATE_CHI2_2D, anees_interval_95, chi_square_quantile_wh};
 pub use detector::{LocalDetector, LocalDetectorFactory};
-pub use error::{Error, Result, ensure_in_range, ensure_open_probability, ensure_positive};
+pub use error::{
+    Error, Result, ensure_in_range, ensure_non_negative, ensure_open_probability, ensure_positive,
+};
 pub use gaussian::{
     CholeskyFactor, Gaussian, LN_2PI, check_finite_matrix, check_positive_semidefinite,
     check_symmetric, cholesky_checked,
@@ -57,4 +59,6 @@ pub use models::{
 };
 pub use mot::{MotRow, format_mot, parse_mot};
 pub use simulate::{Simulation, SimulationConfig, Simulator};
-pub use track::{Frame, Location, Measurement, Origin, Scan, Track, TrackId, TrackPoint, TrackSet};
+pub use track::{
+    Frame, FrameClock, Location, Measurement, Origin, Scan, Track, TrackId, TrackPoint, TrackSet,
+};

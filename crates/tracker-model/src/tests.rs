@@ -699,3 +699,34 @@ fn mot_parse_errors_carry_line_numbers() {
     let rows = parse_mot("1,3,0,0,1,1\n1,3,5,5,1,1\n".as_bytes()).unwrap();
     assert!(TrackSet::from_mot_rows(&rows).is_err()); // the same id twice in one frame
 }
+
+#[test]
+fn frame_clock_maps_frames_and_times_both_ways() {
+    // 25 frames per second starting at 2 s: frame 10 is at 2.4 s.
+    let clock = FrameClock::new(2.0, 0.04).unwrap();
+    assert_relative_eq!(clock.time_s(10), 2.4, epsilon = 1e-12);
+    assert_eq!(clock.frame_at(2.4).unwrap(), 10);
+    // An audio block stamped 2.419 s belongs to frame 10, one at 2.421 s to frame 11.
+    assert_eq!(clock.frame_at(2.419).unwrap(), 10);
+    assert_eq!(clock.frame_at(2.421).unwrap(), 11);
+    // Before the first frame's half-period, outside the range, or not a number: errors.
+    assert!(clock.frame_at(1.9).is_err());
+    assert!(clock.frame_at(f64::NAN).is_err());
+    assert!(clock.frame_at(1e12).is_err());
+    assert!(FrameClock::new(0.0, 0.0).is_err());
+    assert!(FrameClock::new(f64::INFINITY, 1.0).is_err());
+    // Deserialisation goes through the same checks.
+    assert!(serde_json::from_str::<FrameClock>(r#"{"start_s":0.0,"period_s":-1.0}"#).is_err());
+    let back: FrameClock = serde_json::from_str(&serde_json::to_string(&clock).unwrap()).unwrap();
+    assert_eq!(back, clock);
+}
+
+#[test]
+fn non_negative_check_accepts_zero_only_from_the_boundary() {
+    assert!(ensure_non_negative(0.0, "x").is_ok());
+    assert!(ensure_non_negative(2.5, "x").is_ok());
+    for bad in [-1e-300, f64::NAN, f64::INFINITY] {
+        let err = ensure_non_negative(bad, "gap_cost").unwrap_err();
+        assert!(err.to_string().contains("gap_cost"), "{err}");
+    }
+}

@@ -8,8 +8,82 @@ use serde::{Deserialize, Serialize};
 use crate::error::{Error, Result};
 use crate::geometry::{BoundingBox, Point2};
 
-/// A frame (scan) index. MOTChallenge frames start at 1; simulated scans at 0.
+/// A frame (scan) index: a tick of the one clock that every tracker works on. MOTChallenge
+/// frames start at 1; simulated scans at 0. A model's sampling period (`dt_s`) is the time
+/// between consecutive frames; sensors with clocks of their own (audio blocks, camera frames
+/// at another rate) map their time stamps to frames with a [`FrameClock`].
 pub type Frame = u32;
+
+/// The time convention of a sequence: frame `k` is at `start_s + k · period_s` seconds.
+/// Scans and track points carry frames only; a `FrameClock` beside them turns frames into
+/// seconds and a sensor's time stamps into the frame whose tick is nearest.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, try_from = "FrameClockFields")]
+pub struct FrameClock {
+    start_s: f64,
+    period_s: f64,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FrameClockFields {
+    start_s: f64,
+    period_s: f64,
+}
+
+impl TryFrom<FrameClockFields> for FrameClock {
+    type Error = Error;
+
+    fn try_from(f: FrameClockFields) -> Result<Self> {
+        Self::new(f.start_s, f.period_s)
+    }
+}
+
+impl FrameClock {
+    /// A clock whose frame 0 is at `start_s` seconds, with `period_s` seconds between frames.
+    pub fn new(start_s: f64, period_s: f64) -> Result<Self> {
+        if !start_s.is_finite() {
+            return Err(Error::InvalidParameter {
+                name: "start_s",
+                reason: format!("{start_s} must be finite"),
+            });
+        }
+        crate::error::ensure_positive(period_s, "period_s")?;
+        Ok(Self { start_s, period_s })
+    }
+
+    /// The time of frame 0, in seconds.
+    pub fn start_s(&self) -> f64 {
+        self.start_s
+    }
+
+    /// Seconds between consecutive frames.
+    pub fn period_s(&self) -> f64 {
+        self.period_s
+    }
+
+    /// The time of `frame`, in seconds.
+    pub fn time_s(&self, frame: Frame) -> f64 {
+        self.start_s + f64::from(frame) * self.period_s
+    }
+
+    /// The frame whose tick is nearest to `time_s` (ties go to the later frame); an error when
+    /// the time is not finite or lies outside the frames' range.
+    pub fn frame_at(&self, time_s: f64) -> Result<Frame> {
+        let k = ((time_s - self.start_s) / self.period_s + 0.5).floor();
+        if k.is_finite() && (0.0..=f64::from(Frame::MAX)).contains(&k) {
+            Ok(k as Frame)
+        } else {
+            Err(Error::InvalidParameter {
+                name: "time_s",
+                reason: format!(
+                    "{time_s} s is outside the frames of a clock starting at {} s",
+                    self.start_s
+                ),
+            })
+        }
+    }
+}
 
 /// Identity of a track, or of a true target in simulated truth.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]

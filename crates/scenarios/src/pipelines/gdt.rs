@@ -3,28 +3,28 @@
 //! every masked crossing recovered by GDT and by the baselines; MAE per axis, Total (both
 //! conventions) and MMAE in the format of the seed's Table 1, and time per gap (Table 2).
 
-use std::time::Instant;
-
 use anyhow::Result;
 use eval_metrics::{Mae, mae, mmae};
 use gdt_bridge::{
     BSplineConfig, Baseline, GapCase, GdtConfig, Observation, RecoveredGap, gaps_from_mask,
     recover_baseline, recover_gdt, recover_gdt_goal_state,
 };
-use indicatif::ProgressBar;
 use nalgebra::Vector2;
 use rand::{Rng, RngExt};
+use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
 use tracker_model::{Point2, Region2, Track, TrackId, TrackPoint, TrackSet};
 
-use crate::plot::{Axes, Series, Style, chart};
-use crate::report::{Plot, Section, Table, fmt_num};
-use crate::scenario::{Metrics, PipelineOutput, Scenario};
+use crate::{Chart, Clock, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
 
+/// The `gdt-gaps` pipeline.
+pub struct GdtGaps;
+
+/// Its parameters.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct Params {
+pub struct Params {
     width: f64,
     height: f64,
     n_walkers: usize,
@@ -94,19 +94,54 @@ type Method = (
     Box<dyn Fn(&[Observation], &[Observation]) -> gdt_bridge::Result<RecoveredGap>>,
 );
 
-pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput> {
-    let p: Params = scenario.params()?;
-    let mut rng = scenario.rng();
+/// A masked crossing with the noisy observations before and after it.
+type Case = (GapCase, Vec<Observation>, Vec<Observation>);
+
+/// How one method did over all gaps.
+pub struct MethodResult {
+    name: &'static str,
+    /// MAE over all hidden positions pooled.
+    pooled: Mae,
+    /// Mean of the per-gap MAEs.
+    mmae: Mae,
+    /// Wall-clock microseconds per gap.
+    micros: f64,
+    /// Its recovery of the longest gap.
+    longest: RecoveredGap,
+}
+
+/// The scene, the gaps and every method's errors.
+pub struct Output {
+    width: f64,
+    height: f64,
+    n_frames: u32,
+    /// Walkers kept (at least three frames in view).
+    n_walkers: usize,
+    mask_lower: Point2,
+    mask_upper: Point2,
+    n_gaps: usize,
+    /// Hidden positions over all gaps.
+    n_hidden: usize,
+    /// The longest gap with its observations before and after.
+    longest: Case,
+    /// Per method, in the order of the tables.
+    methods: Vec<MethodResult>,
+}
+
+/// The walkers' true and observed tracks, drawn in order from `rng`.
+fn simulate(p: &Params, rng: &mut impl Rng) -> Result<(TrackSet, TrackSet)> {
     let (mut truth, mut seen) = (Vec::new(), Vec::new());
     for id in 0..p.n_walkers as u64 {
-        if let Some((t, s)) = walker(&p, id, &mut rng)? {
+        if let Some((t, s)) = walker(p, id, rng)? {
             truth.push(t);
             seen.push(s);
         }
     }
-    let truth = TrackSet::from_tracks(truth)?;
-    let seen = TrackSet::from_tracks(seen)?;
-    // Gaps are cut from the truth; the methods see the noisy observations at the same frames.
+    Ok((TrackSet::from_tracks(truth)?, TrackSet::from_tracks(seen)?))
+}
+
+/// Gaps are cut from the truth; the methods see the noisy observations at the same frames.
+fn cut_gaps(truth: &TrackSet, seen: &TrackSet, mask: &Region2) -> Vec<Case> {
     let observed = |c: &GapCase, side: &[Observation]| -> Vec<Observation> {
         let track = seen.get(c.truth_id);
         side.iter()
@@ -118,20 +153,20 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
             })
             .collect()
     };
-    let cases: Vec<(GapCase, Vec<Observation>, Vec<Observation>)> = gaps_from_mask(&truth, &p.mask)
+    gaps_from_mask(truth, mask)
         .into_iter()
         .map(|c| {
             let (b, a) = (observed(&c, &c.before), observed(&c, &c.after));
             (c, b, a)
         })
-        .collect();
-    anyhow::ensure!(
-        !cases.is_empty(),
-        "no trajectory crosses the mask; change the seed or the scene"
-    );
+        .collect()
+}
+
+/// GDT, its goal-state variant and the baselines.
+fn methods(p: &Params) -> Vec<Method> {
     let gdt_cfg = p.gdt;
     let bs = p.bspline.clone();
-    let methods: Vec<Method> = vec![
+    vec![
         (
             "GDT",
             Box::new(move |a: &[Observation], b: &[Observation]| recover_gdt(a, b, &gdt_cfg)),
@@ -160,13 +195,132 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
                 recover_baseline(a, b, &Baseline::LeastSquaresBSpline(bs.clone()))
             }),
         ),
-    ];
-    progress.set_length(methods.len() as u64);
+    ]
+}
+
+/// Recovers every gap with one method, times it and scores it.
+fn evaluate(
+    method: &Method,
+    cases: &[Case],
+    longest: usize,
+    clock: &dyn Clock,
+) -> Result<MethodResult> {
+    let (name, recover) = method;
+    let mut per_gap: Vec<Mae> = Vec::with_capacity(cases.len());
+    let (mut all_truth, mut all_est) = (Vec::new(), Vec::new());
+    let start = clock.now_s();
+    let recovered: Vec<RecoveredGap> = cases
+        .iter()
+        .map(|(_, before, after)| recover(before, after))
+        .collect::<gdt_bridge::Result<_>>()?;
+    let micros = (clock.now_s() - start) * 1e6 / cases.len() as f64;
+    for ((case, _, _), r) in cases.iter().zip(&recovered) {
+        let t: Vec<Point2> = case.hidden.iter().map(|o| o.position).collect();
+        per_gap.push(mae(&t, &r.positions)?);
+        all_truth.extend(t);
+        all_est.extend(r.positions.iter().copied());
+    }
+    let pooled = mae(&all_truth, &all_est)?;
+    let m = mmae(&per_gap)?;
+    Ok(MethodResult {
+        name,
+        pooled,
+        mmae: m,
+        micros,
+        longest: recovered[longest].clone(),
+    })
+}
+
+impl Pipeline for GdtGaps {
+    type Params = Params;
+    type Output = Output;
+
+    fn compute(p: &Params, rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Output> {
+        let (truth, seen) = simulate(p, rng)?;
+        let mut cases = cut_gaps(&truth, &seen, &p.mask);
+        anyhow::ensure!(
+            !cases.is_empty(),
+            "no trajectory crosses the mask; change the seed or the scene"
+        );
+        let methods = methods(p);
+        env.progress.set_length(methods.len() as u64);
+        let longest = cases
+            .iter()
+            .enumerate()
+            .max_by_key(|(_, c)| c.0.hidden.len())
+            .map_or(0, |(i, _)| i);
+        let mut results = Vec::with_capacity(methods.len());
+        for method in &methods {
+            results.push(evaluate(method, &cases, longest, env.clock)?);
+            env.progress.advance(1);
+        }
+        Ok(Output {
+            width: p.width,
+            height: p.height,
+            n_frames: p.n_frames,
+            n_walkers: truth.len(),
+            mask_lower: *p.mask.lower(),
+            mask_upper: *p.mask.upper(),
+            n_gaps: cases.len(),
+            n_hidden: cases.iter().map(|c| c.0.hidden.len()).sum(),
+            longest: cases.swap_remove(longest),
+            methods: results,
+        })
+    }
+
+    fn metrics(out: &Output) -> Metrics {
+        let mut metrics = Metrics::new();
+        for r in &out.methods {
+            let key = r.name.to_lowercase().replace([' ', '-'], "_");
+            metrics.insert(format!("{key}_mae_x"), r.pooled.x);
+            metrics.insert(format!("{key}_mae_y"), r.pooled.y);
+            metrics.insert(format!("{key}_total_euclidean"), r.pooled.euclidean);
+            metrics.insert(format!("{key}_total_axis_mean"), r.pooled.axis_mean);
+            metrics.insert(format!("{key}_mmae"), r.mmae.euclidean);
+        }
+        metrics.insert("n_gaps".into(), out.n_gaps as f64);
+        metrics
+    }
+
+    fn present(out: &Output) -> Section {
+        let (lo, hi) = (out.mask_lower, out.mask_upper);
+        let (table, timing) = tables(out);
+        Section {
+            title: "Goal-directed gap recovery against spline baselines".into(),
+            summary: format!(
+                "{} walkers over {} frames in a {}×{} image; a {}×{} mask hides each crossing. \
+                 Seed 003 reports MMAE 2.21 px (GDT) against 2.77 (cubic spline) and 2.84 (B-spline) on \
+                 PETS2009 S2L1; here the scene is synthetic, so compare the ordering, not the values.",
+                out.n_walkers,
+                out.n_frames,
+                out.width,
+                out.height,
+                hi.x - lo.x,
+                hi.y - lo.y
+            ),
+            tables: vec![table, timing],
+            figures: vec![
+                Figure::new(
+                    "band",
+                    "x of the longest crossing: truth, recoveries and GDT's ±2σ band",
+                    band_chart(out),
+                ),
+                Figure::new(
+                    "path",
+                    "The longest crossing in the image with the mask",
+                    path_chart(out),
+                ),
+            ],
+        }
+    }
+}
+
+/// The error table (seed 003 Table 1) and the timing table (Table 2).
+fn tables(out: &Output) -> (Table, Table) {
     let mut table = Table::new(
         &format!(
             "Recovery error in pixels over {} masked crossings ({} hidden positions), format of seed 003 Table 1",
-            cases.len(),
-            cases.iter().map(|c| c.0.hidden.len()).sum::<usize>()
+            out.n_gaps, out.n_hidden
         ),
         &[
             "method",
@@ -181,52 +335,23 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
         "Execution time per gap (seed 003 Table 2 format; wall clock, this machine)",
         &["method", "µs per gap"],
     );
-    let mut metrics = Metrics::new();
-    let mut recovered_example = Vec::new();
-    let longest = cases
-        .iter()
-        .enumerate()
-        .max_by_key(|(_, c)| c.0.hidden.len())
-        .map_or(0, |(i, _)| i);
-    for (name, recover) in &methods {
-        let mut per_gap: Vec<Mae> = Vec::with_capacity(cases.len());
-        let (mut all_truth, mut all_est) = (Vec::new(), Vec::new());
-        let start = Instant::now();
-        let recovered: Vec<RecoveredGap> = cases
-            .iter()
-            .map(|(_, before, after)| recover(before, after))
-            .collect::<gdt_bridge::Result<_>>()?;
-        let micros = start.elapsed().as_secs_f64() * 1e6 / cases.len() as f64;
-        for ((case, _, _), r) in cases.iter().zip(&recovered) {
-            let t: Vec<Point2> = case.hidden.iter().map(|o| o.position).collect();
-            per_gap.push(mae(&t, &r.positions)?);
-            all_truth.extend(t);
-            all_est.extend(r.positions.iter().copied());
-        }
-        let pooled = mae(&all_truth, &all_est)?;
-        let m = mmae(&per_gap)?;
-        let key = name.to_lowercase().replace([' ', '-'], "_");
-        metrics.insert(format!("{key}_mae_x"), pooled.x);
-        metrics.insert(format!("{key}_mae_y"), pooled.y);
-        metrics.insert(format!("{key}_total_euclidean"), pooled.euclidean);
-        metrics.insert(format!("{key}_total_axis_mean"), pooled.axis_mean);
-        metrics.insert(format!("{key}_mmae"), m.euclidean);
+    for r in &out.methods {
         table.row(vec![
-            (*name).into(),
-            fmt_num(pooled.x),
-            fmt_num(pooled.y),
-            fmt_num(pooled.euclidean),
-            fmt_num(pooled.axis_mean),
-            fmt_num(m.euclidean),
+            r.name.into(),
+            fmt_num(r.pooled.x),
+            fmt_num(r.pooled.y),
+            fmt_num(r.pooled.euclidean),
+            fmt_num(r.pooled.axis_mean),
+            fmt_num(r.mmae.euclidean),
         ]);
-        timing.row(vec![(*name).into(), fmt_num(micros)]);
-        recovered_example.push((*name, recovered[longest].clone()));
-        progress.inc(1);
+        timing.row(vec![r.name.into(), fmt_num(r.micros)]);
     }
-    metrics.insert("n_gaps".into(), cases.len() as f64);
+    (table, timing)
+}
 
-    // The longest gap: x against frame with GDT's ±2σ band, and the path in the image.
-    let (case, before, after) = &cases[longest];
+/// The longest gap: x against frame with GDT's ±2σ band.
+fn band_chart(out: &Output) -> Chart {
+    let (case, before, after) = &out.longest;
     let frame_x = |obs: &[Observation]| {
         obs.iter()
             .map(|o| (f64::from(o.frame), o.position.x))
@@ -241,7 +366,8 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
         ),
         Series::new("truth", frame_x(&case.hidden), Style::Line, 5),
     ];
-    for (c, (name, r)) in recovered_example.iter().enumerate() {
+    for (c, m) in out.methods.iter().enumerate() {
+        let r = &m.longest;
         let pts = r
             .frames
             .iter()
@@ -249,7 +375,7 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
             .map(|(f, q)| (f64::from(*f), q.x))
             .collect();
         series.push(Series::new(
-            name,
+            m.name,
             pts,
             if c == 0 { Style::Line } else { Style::ThinLine },
             c,
@@ -272,21 +398,24 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
             }
         }
     }
-    let band_plot = chart(
-        &Axes {
-            title: "Longest masked crossing: x against frame",
-            x: "frame",
-            y: "x (pixels)",
-        },
-        &series,
-    )?;
+    Chart::new(
+        "Longest masked crossing: x against frame",
+        "frame",
+        "x (pixels)",
+        series,
+    )
+}
+
+/// The longest gap's path in the image, with the mask.
+fn path_chart(out: &Output) -> Chart {
+    let (case, before, after) = &out.longest;
     let xy = |obs: &[Observation]| {
         obs.iter()
             .map(|o| (o.position.x, o.position.y))
             .collect::<Vec<_>>()
     };
-    let (lo, hi) = (p.mask.lower(), p.mask.upper());
-    let mut path_series = vec![
+    let (lo, hi) = (out.mask_lower, out.mask_upper);
+    let mut series = vec![
         Series::new(
             "mask",
             vec![
@@ -307,51 +436,18 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
         ),
         Series::new("truth", xy(&case.hidden), Style::Line, 5),
     ];
-    for (c, (name, r)) in recovered_example.iter().enumerate() {
-        path_series.push(Series::new(
-            name,
-            r.positions.iter().map(|q| (q.x, q.y)).collect(),
+    for (c, m) in out.methods.iter().enumerate() {
+        series.push(Series::new(
+            m.name,
+            m.longest.positions.iter().map(|q| (q.x, q.y)).collect(),
             Style::Line,
             c,
         ));
     }
-    let path_plot = chart(
-        &Axes {
-            title: "Longest masked crossing in the image",
-            x: "x (pixels)",
-            y: "y (pixels)",
-        },
-        &path_series,
-    )?;
-    Ok(PipelineOutput {
-        metrics,
-        section: Section {
-            title: "Goal-directed gap recovery against spline baselines".into(),
-            summary: format!(
-                "{} walkers over {} frames in a {}×{} image; a {}×{} mask hides each crossing. \
-                 Seed 003 reports MMAE 2.21 px (GDT) against 2.77 (cubic spline) and 2.84 (B-spline) on \
-                 PETS2009 S2L1; here the scene is synthetic, so compare the ordering, not the values.",
-                truth.len(),
-                p.n_frames,
-                p.width,
-                p.height,
-                hi.x - lo.x,
-                hi.y - lo.y
-            ),
-            tables: vec![table, timing],
-            plots: vec![
-                Plot {
-                    name: "band".into(),
-                    caption: "x of the longest crossing: truth, recoveries and GDT's ±2σ band"
-                        .into(),
-                    svg: band_plot,
-                },
-                Plot {
-                    name: "path".into(),
-                    caption: "The longest crossing in the image with the mask".into(),
-                    svg: path_plot,
-                },
-            ],
-        },
-    })
+    Chart::new(
+        "Longest masked crossing in the image",
+        "x (pixels)",
+        "y (pixels)",
+        series,
+    )
 }

@@ -4,7 +4,6 @@
 //! 95 % χ² interval).
 
 use anyhow::{Context, Result};
-use indicatif::ProgressBar;
 use nalgebra::{Matrix4, Vector2, Vector4};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -16,13 +15,15 @@ use tracker_model::{
     position_measurement, smooth,
 };
 
-use crate::plot::{Axes, Series, Style, chart};
-use crate::report::{Section, Table, fmt_num};
-use crate::scenario::{Metrics, PipelineOutput, Scenario};
+use crate::{Chart, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
 
+/// The `kalman-crossing` pipeline.
+pub struct KalmanCrossing;
+
+/// Its parameters.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct Params {
+pub struct Params {
     /// Monte Carlo runs.
     n_runs: usize,
     /// Scans per run.
@@ -44,7 +45,7 @@ struct Params {
 
 /// Per-run accumulators, indexed by time step.
 #[derive(Clone)]
-struct RunStats {
+pub struct RunStats {
     sq_pos_filtered: Vec<f64>,
     sq_pos_smoothed: Vec<f64>,
     sq_vel_filtered: Vec<f64>,
@@ -84,7 +85,7 @@ impl RunStats {
 }
 
 /// One target's truth, measurements and estimates in one run (kept for the plot).
-struct TargetRun {
+pub struct TargetRun {
     truth: Vec<Vector4<f64>>,
     measurements: Vec<Option<Vector2<f64>>>,
     filtered: Vec<Gaussian<4>>,
@@ -190,81 +191,185 @@ fn one_run(
     Ok((stats, targets))
 }
 
-pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput> {
-    let p: Params = scenario.params()?;
-    anyhow::ensure!(
-        p.n_runs > 0 && p.n_steps > 1,
-        "need n_runs > 0 and n_steps > 1"
-    );
-    anyhow::ensure!(
-        (0.0..=1.0).contains(&p.p_detect),
-        "p_detect must lie in [0, 1]"
-    );
-    let motion = ConstantVelocity2::new(p.dt_s, CvNoise::WhiteAcceleration { q: p.accel_psd })?;
-    progress.set_length(p.n_runs as u64);
-    let base = scenario.rng();
-    // One generator stream per run: the result does not depend on rayon's thread count.
-    let runs: Vec<(RunStats, Vec<TargetRun>)> = (0..p.n_runs)
-        .into_par_iter()
-        .map(|r| {
-            let mut rng = base.clone();
-            rng.set_stream(r as u64);
-            let out = one_run(&p, &motion, &mut rng);
-            progress.inc(1);
-            out
-        })
-        .collect::<Result<_>>()?;
-    let mut total = RunStats::zeros(p.n_steps);
-    for (stats, _) in &runs {
-        total.add(stats);
+/// The summed statistics over all runs and the targets of run 0.
+pub struct Output {
+    /// Monte Carlo runs.
+    n_runs: usize,
+    /// Scans per run.
+    n_steps: usize,
+    /// Per-step sums over all runs and both targets.
+    total: RunStats,
+    /// The two targets of run 0, for the track plot.
+    run0: Vec<TargetRun>,
+    /// The ANEES 95 % interval per scan.
+    anees_95: (f64, f64),
+}
+
+impl Output {
+    /// Tracks over all runs (two per run).
+    fn n_tracks(&self) -> f64 {
+        (2 * self.n_runs) as f64
     }
-    let n_tracks = (2 * p.n_runs) as f64;
-    let steps = p.n_steps as f64;
-    let mean_all = |v: &[f64]| v.iter().sum::<f64>() / (n_tracks * steps);
-    let (lo, hi) = anees_interval_95(4, 2 * p.n_runs);
-    let share_inside = |v: &[f64]| {
+
+    /// The mean of per-step sums over all tracks and steps.
+    fn mean_all(&self, v: &[f64]) -> f64 {
+        v.iter().sum::<f64>() / (self.n_tracks() * self.n_steps as f64)
+    }
+
+    /// The share of steps whose ANEES lies in the 95 % interval.
+    fn share_inside(&self, v: &[f64]) -> f64 {
+        let (lo, hi) = self.anees_95;
+        let n_tracks = self.n_tracks();
         v.iter()
             .filter(|&&s| (lo..=hi).contains(&(s / n_tracks)))
             .count() as f64
-            / steps
-    };
-    let mut metrics = Metrics::new();
-    metrics.insert(
-        "position_rmse_filtered".into(),
-        mean_all(&total.sq_pos_filtered).sqrt(),
-    );
-    metrics.insert(
-        "position_rmse_smoothed".into(),
-        mean_all(&total.sq_pos_smoothed).sqrt(),
-    );
-    metrics.insert(
-        "velocity_rmse_filtered".into(),
-        mean_all(&total.sq_vel_filtered).sqrt(),
-    );
-    metrics.insert(
-        "velocity_rmse_smoothed".into(),
-        mean_all(&total.sq_vel_smoothed).sqrt(),
-    );
-    metrics.insert("anees_filtered".into(), mean_all(&total.nees_filtered));
-    metrics.insert("anees_smoothed".into(), mean_all(&total.nees_smoothed));
-    metrics.insert(
-        "steps_with_anees_in_95_filtered".into(),
-        share_inside(&total.nees_filtered),
-    );
-    metrics.insert(
-        "steps_with_anees_in_95_smoothed".into(),
-        share_inside(&total.nees_smoothed),
-    );
-    metrics.insert(
-        "missed_fraction".into(),
-        total.missed as f64 / (n_tracks * steps),
-    );
+            / self.n_steps as f64
+    }
 
+    /// Per-step RMSE from per-step sums of squares.
+    fn per_step(&self, v: &[f64]) -> Vec<(f64, f64)> {
+        let n_tracks = self.n_tracks();
+        v.iter()
+            .enumerate()
+            .map(|(k, s)| (k as f64, (s / n_tracks).sqrt()))
+            .collect()
+    }
+}
+
+impl Pipeline for KalmanCrossing {
+    type Params = Params;
+    type Output = Output;
+
+    fn compute(p: &Params, rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Output> {
+        anyhow::ensure!(
+            p.n_runs > 0 && p.n_steps > 1,
+            "need n_runs > 0 and n_steps > 1"
+        );
+        anyhow::ensure!(
+            (0.0..=1.0).contains(&p.p_detect),
+            "p_detect must lie in [0, 1]"
+        );
+        let motion = ConstantVelocity2::new(p.dt_s, CvNoise::WhiteAcceleration { q: p.accel_psd })?;
+        env.progress.set_length(p.n_runs as u64);
+        let base = rng.clone();
+        // One generator stream per run: the result does not depend on rayon's thread count.
+        let runs: Vec<(RunStats, Vec<TargetRun>)> = (0..p.n_runs)
+            .into_par_iter()
+            .map(|r| {
+                let mut rng = base.clone();
+                rng.set_stream(r as u64);
+                let out = one_run(p, &motion, &mut rng);
+                env.progress.advance(1);
+                out
+            })
+            .collect::<Result<_>>()?;
+        let mut total = RunStats::zeros(p.n_steps);
+        for (stats, _) in &runs {
+            total.add(stats);
+        }
+        let run0 = runs
+            .into_iter()
+            .next()
+            .map(|(_, targets)| targets)
+            .context("no run")?;
+        Ok(Output {
+            n_runs: p.n_runs,
+            n_steps: p.n_steps,
+            total,
+            run0,
+            anees_95: anees_interval_95(4, 2 * p.n_runs),
+        })
+    }
+
+    fn metrics(out: &Output) -> Metrics {
+        let total = &out.total;
+        let mut metrics = Metrics::new();
+        metrics.insert(
+            "position_rmse_filtered".into(),
+            out.mean_all(&total.sq_pos_filtered).sqrt(),
+        );
+        metrics.insert(
+            "position_rmse_smoothed".into(),
+            out.mean_all(&total.sq_pos_smoothed).sqrt(),
+        );
+        metrics.insert(
+            "velocity_rmse_filtered".into(),
+            out.mean_all(&total.sq_vel_filtered).sqrt(),
+        );
+        metrics.insert(
+            "velocity_rmse_smoothed".into(),
+            out.mean_all(&total.sq_vel_smoothed).sqrt(),
+        );
+        metrics.insert("anees_filtered".into(), out.mean_all(&total.nees_filtered));
+        metrics.insert("anees_smoothed".into(), out.mean_all(&total.nees_smoothed));
+        metrics.insert(
+            "steps_with_anees_in_95_filtered".into(),
+            out.share_inside(&total.nees_filtered),
+        );
+        metrics.insert(
+            "steps_with_anees_in_95_smoothed".into(),
+            out.share_inside(&total.nees_smoothed),
+        );
+        metrics.insert(
+            "missed_fraction".into(),
+            total.missed as f64 / (out.n_tracks() * out.n_steps as f64),
+        );
+        metrics
+    }
+
+    fn present(out: &Output) -> Section {
+        Section {
+            title: "Kalman filter and RTS smoother on two crossing targets".into(),
+            summary:
+                "Constant-velocity targets with white-acceleration noise, position measurements \
+                      with missed scans, each target filtered with its own measurements. Smoothing \
+                      uses the future as well as the past, so its error is lower; both estimators \
+                      must stay consistent (average NEES near the state dimension, 4)."
+                    .into(),
+            tables: vec![table(out)],
+            figures: vec![
+                Figure::new(
+                    "tracks",
+                    "Truth, measurements, filtered and smoothed tracks of run 0",
+                    track_chart(&out.run0),
+                ),
+                Figure::new(
+                    "rmse",
+                    "Position RMSE against scan, over all runs",
+                    Chart::new(
+                        "Position RMSE per scan",
+                        "scan",
+                        "RMSE",
+                        vec![
+                            Series::new(
+                                "filtered",
+                                out.per_step(&out.total.sq_pos_filtered),
+                                Style::Line,
+                                0,
+                            ),
+                            Series::new(
+                                "RTS smoothed",
+                                out.per_step(&out.total.sq_pos_smoothed),
+                                Style::Line,
+                                1,
+                            ),
+                        ],
+                    ),
+                ),
+            ],
+        }
+    }
+}
+
+/// The table of filtered against smoothed metrics.
+fn table(out: &Output) -> Table {
+    let metrics = KalmanCrossing::metrics(out);
+    let (lo, hi) = out.anees_95;
     let mut table = Table::new(
         &format!(
             "Two crossing targets, {} runs × {} scans, true associations (ANEES 95 % interval per scan: [{}, {}])",
-            p.n_runs,
-            p.n_steps,
+            out.n_runs,
+            out.n_steps,
             fmt_num(lo),
             fmt_num(hi)
         ),
@@ -285,31 +390,13 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
             fmt_num(metrics[&format!("{key}_smoothed")]),
         ]);
     }
+    table
+}
 
-    let per_step = |v: &[f64]| -> Vec<(f64, f64)> {
-        v.iter()
-            .enumerate()
-            .map(|(k, s)| (k as f64, (s / n_tracks).sqrt()))
-            .collect()
-    };
-    let rmse_plot = chart(
-        &Axes {
-            title: "Position RMSE per scan",
-            x: "scan",
-            y: "RMSE",
-        },
-        &[
-            Series::new("filtered", per_step(&total.sq_pos_filtered), Style::Line, 0),
-            Series::new(
-                "RTS smoothed",
-                per_step(&total.sq_pos_smoothed),
-                Style::Line,
-                1,
-            ),
-        ],
-    )?;
+/// Run 0's truth, measurements and estimates on the plane.
+fn track_chart(run0: &[TargetRun]) -> Chart {
     let mut series = Vec::new();
-    for (i, t) in runs[0].1.iter().enumerate() {
+    for (i, t) in run0.iter().enumerate() {
         let pos = |v: &Vector4<f64>| (v[0], v[1]);
         let suffix = |s: &str| if i == 0 { s.to_string() } else { String::new() };
         series.push(Series::new(
@@ -341,38 +428,5 @@ pub fn run(scenario: &Scenario, progress: &ProgressBar) -> Result<PipelineOutput
             1,
         ));
     }
-    let track_plot = chart(
-        &Axes {
-            title: "Run 0: truth, measurements and estimates",
-            x: "x",
-            y: "y",
-        },
-        &series,
-    )?;
-
-    Ok(PipelineOutput {
-        metrics,
-        section: Section {
-            title: "Kalman filter and RTS smoother on two crossing targets".into(),
-            summary:
-                "Constant-velocity targets with white-acceleration noise, position measurements \
-                      with missed scans, each target filtered with its own measurements. Smoothing \
-                      uses the future as well as the past, so its error is lower; both estimators \
-                      must stay consistent (average NEES near the state dimension, 4)."
-                    .into(),
-            tables: vec![table],
-            plots: vec![
-                crate::report::Plot {
-                    name: "tracks".into(),
-                    caption: "Truth, measurements, filtered and smoothed tracks of run 0".into(),
-                    svg: track_plot,
-                },
-                crate::report::Plot {
-                    name: "rmse".into(),
-                    caption: "Position RMSE against scan, over all runs".into(),
-                    svg: rmse_plot,
-                },
-            ],
-        },
-    })
+    Chart::new("Run 0: truth, measurements and estimates", "x", "y", series)
 }

@@ -1,0 +1,230 @@
+//! # scenarios
+//!
+//! The experiments behind `cargo xtask scenarios` and `cargo xtask report`. Each pipeline reads
+//! its parameters, simulates or loads its data, runs the trackers of the sibling crates and
+//! scores them with eval-metrics. It comes in two parts:
+//!
+//! - [`Pipeline::compute`] takes the parameters, the scenario's seeded generator and an
+//!   [`Env`] (progress and file inputs) and returns a typed result;
+//! - [`Pipeline::metrics`] turns that result into the numbers the regression suite pins, and
+//!   [`Pipeline::present`] into a report [`Section`] of tables and [`Chart`]s.
+//!
+//! This crate is a leaf: it combines its siblings and nothing imports it. It touches no file,
+//! clock or terminal itself: xtask passes file contents in through [`Inputs`] and the time
+//! through [`Clock`], draws progress through [`Progress`], renders the charts and writes the
+//! report. Like xtask, and unlike the
+//! library crates, it reports errors with `anyhow`: a pipeline's error is read by a person.
+//!
+//! [`track`] holds the detection-file trackers that `cargo xtask track` and the `mot-track`
+//! pipeline share, [`mot`] the MOTChallenge text conventions of `cargo xtask eval`.
+//!
+//! ```
+//! use scenarios::{Env, NoClock, NoInputs, NoProgress, run_pipeline};
+//!
+//! let params: toml::Table = toml::from_str(
+//!     r#"
+//!     n_runs = 4
+//!     [config]
+//!     n_scans = 20
+//!     births_per_scan = 1.0
+//!     p_disappear = 0.05
+//!     p_detect = 0.7
+//!     clutter_per_scan = 5.0
+//!     measurement_noise = [0.031, 0.0, 0.0, 0.031]
+//!     initial_speed_max = 2.0
+//!     max_speed = 3.0
+//!     region = { lower = [0.0, 0.0], upper = [100.0, 100.0] }
+//!     motion = { dt_s = 1.0, noise = { discrete = { acceleration_covariance = [0.031, 0.0, 0.0, 0.031] } } }
+//!     "#,
+//! )?;
+//! let env = Env::new(&NoProgress, &NoInputs, &NoClock);
+//! let run = run_pipeline("simulator-poisson", &params, 7, &env)?;
+//! assert!(run.metrics.contains_key("births_per_scan_z"));
+//! # Ok::<(), anyhow::Error>(())
+//! ```
+
+use std::collections::BTreeMap;
+
+use anyhow::{Context, Result, anyhow, bail};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::de::DeserializeOwned;
+
+pub mod mot;
+mod pipelines;
+mod report;
+pub mod track;
+
+pub use report::{Axes, Chart, Figure, Section, Series, Style, Table, fmt_num};
+
+/// Metric name → value, sorted so that expected files diff cleanly.
+pub type Metrics = BTreeMap<String, f64>;
+
+/// Progress of a long computation; called from worker threads.
+pub trait Progress: Sync {
+    /// The number of units the computation will report.
+    fn set_length(&self, units: u64);
+    /// `units` more are done.
+    fn advance(&self, units: u64);
+}
+
+/// Progress that goes nowhere (tests, library use).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoProgress;
+
+impl Progress for NoProgress {
+    fn set_length(&self, _: u64) {}
+    fn advance(&self, _: u64) {}
+}
+
+/// Where a pipeline's input files come from. Paths are as written in the scenario file
+/// (relative to the workspace root); the caller decides how to read them.
+pub trait Inputs: Sync {
+    /// The file's text; the error names the file.
+    fn read_to_string(&self, path: &str) -> Result<String>;
+}
+
+/// No input files: every read is an error.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoInputs;
+
+impl Inputs for NoInputs {
+    fn read_to_string(&self, path: &str) -> Result<String> {
+        bail!("no input files are available here (asked for {path})")
+    }
+}
+
+/// A wall clock, for the timings a report shows (never for a metric the suite pins).
+pub trait Clock: Sync {
+    /// Seconds since an arbitrary fixed instant.
+    fn now_s(&self) -> f64;
+}
+
+/// A clock that stands still: every timing reads 0.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoClock;
+
+impl Clock for NoClock {
+    fn now_s(&self) -> f64 {
+        0.0
+    }
+}
+
+/// What a pipeline may use besides its parameters and generator.
+#[derive(Clone, Copy)]
+pub struct Env<'a> {
+    /// Progress reporting.
+    pub progress: &'a dyn Progress,
+    /// Input files named in the parameters.
+    pub inputs: &'a dyn Inputs,
+    /// Wall-clock time, for reported timings.
+    pub clock: &'a dyn Clock,
+    /// The scenario's seed, for library calls that take a seed rather than a generator.
+    pub seed: u64,
+}
+
+impl<'a> Env<'a> {
+    /// An environment with seed 0 (`run_pipeline` sets the scenario's).
+    pub fn new(progress: &'a dyn Progress, inputs: &'a dyn Inputs, clock: &'a dyn Clock) -> Self {
+        Self {
+            progress,
+            inputs,
+            clock,
+            seed: 0,
+        }
+    }
+}
+
+/// One kind of experiment.
+pub trait Pipeline {
+    /// The scenario file's `[params]` table; unknown keys are errors.
+    type Params: DeserializeOwned;
+    /// What `compute` measured, before any formatting.
+    type Output;
+
+    /// Runs the experiment. Parallel work gives each task its own stream of `rng`
+    /// (`set_stream`) so the output does not depend on the thread count.
+    fn compute(params: &Self::Params, rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Self::Output>;
+
+    /// The numbers the regression suite compares with `fixtures/expected/`.
+    fn metrics(output: &Self::Output) -> Metrics;
+
+    /// The report section: tables and charts.
+    fn present(output: &Self::Output) -> Section;
+}
+
+/// A finished pipeline run.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// The metrics; every one is finite.
+    pub metrics: Metrics,
+    /// The report section.
+    pub section: Section,
+}
+
+type RunFn = fn(&toml::Table, u64, &Env<'_>) -> Result<Run>;
+
+fn run_typed<P: Pipeline>(params: &toml::Table, seed: u64, env: &Env<'_>) -> Result<Run> {
+    let params: P::Params = toml::Value::Table(params.clone())
+        .try_into()
+        .context("bad [params]")?;
+    let env = Env { seed, ..*env };
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let output = P::compute(&params, &mut rng, &env)?;
+    let metrics = P::metrics(&output);
+    if let Some((key, value)) = metrics.iter().find(|(_, v)| !v.is_finite()) {
+        bail!("metric {key} is not finite ({value})");
+    }
+    Ok(Run {
+        metrics,
+        section: P::present(&output),
+    })
+}
+
+/// Every pipeline by the name a scenario file gives it.
+const PIPELINES: &[(&str, RunFn)] = &[
+    ("gdt-gaps", run_typed::<pipelines::gdt::GdtGaps>),
+    ("hmm-tracking", run_typed::<pipelines::hmm::HmmTracking>),
+    (
+        "kalman-crossing",
+        run_typed::<pipelines::kalman::KalmanCrossing>,
+    ),
+    ("mcmcda-batch", run_typed::<pipelines::mcmcda::Batch>),
+    ("mcmcda-online", run_typed::<pipelines::mcmcda::Online>),
+    ("mcmcda-sweep", run_typed::<pipelines::mcmcda::Sweep>),
+    ("mot-eval", run_typed::<pipelines::mot_eval::MotEval>),
+    ("mot-track", run_typed::<pipelines::mot_track::MotTrack>),
+    (
+        "phd-pedestrians",
+        run_typed::<pipelines::phd::PhdPedestrians>,
+    ),
+    (
+        "simulator-poisson",
+        run_typed::<pipelines::simulator::SimulatorPoisson>,
+    ),
+];
+
+/// Whether a pipeline of this name exists.
+pub fn is_pipeline(name: &str) -> bool {
+    PIPELINES.iter().any(|(n, _)| *n == name)
+}
+
+/// All pipeline names, for error messages.
+pub fn pipeline_names() -> Vec<&'static str> {
+    PIPELINES.iter().map(|(n, _)| *n).collect()
+}
+
+/// Runs the pipeline `name` on `params` with a generator seeded from `seed`.
+pub fn run_pipeline(name: &str, params: &toml::Table, seed: u64, env: &Env<'_>) -> Result<Run> {
+    let run = PIPELINES
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, f)| *f)
+        .ok_or_else(|| {
+            anyhow!(
+                "unknown pipeline {name:?}; known: {}",
+                pipeline_names().join(", ")
+            )
+        })?;
+    run(params, seed, env)
+}

@@ -1,0 +1,10 @@
+//! The pipelines a scenario file can name; `PIPELINES` in lib.rs registers them.
+
+pub mod gdt;
+pub mod hmm;
+pub mod kalman;
+pub mod mcmcda;
+pub mod mot_eval;
+pub mod mot_track;
+pub mod phd;
+pub mod simulator;
