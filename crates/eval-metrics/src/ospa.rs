@@ -2,7 +2,7 @@
 //! García-Fernández & Svensson, FUSION 2017) between finite sets of points.
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{Frame, Point2, TrackSet};
+use tracker_model::{Frame, TrackSet, Vec2};
 
 use crate::error::{Error, Result};
 
@@ -63,7 +63,7 @@ pub struct Gospa {
     pub n_false: usize,
 }
 
-fn check_points(points: &[Point2], what: &'static str) -> Result<()> {
+fn check_points(points: &[Vec2], what: &'static str) -> Result<()> {
     if points.iter().all(|p| p.x.is_finite() && p.y.is_finite()) {
         Ok(())
     } else {
@@ -74,8 +74,8 @@ fn check_points(points: &[Point2], what: &'static str) -> Result<()> {
 /// Optimal assignment of min(d, c)^p between `x` and `y`: (sum of assigned costs, assigned
 /// pairs with d < c).
 fn cutoff_assignment(
-    x: &[Point2],
-    y: &[Point2],
+    x: &[Vec2],
+    y: &[Vec2],
     cfg: &OspaConfig,
 ) -> Result<(f64, Vec<(usize, usize)>)> {
     let cp = cfg.cutoff.powf(cfg.order);
@@ -96,7 +96,7 @@ fn cutoff_assignment(
 }
 
 /// OSPA between two point sets; 0 when both are empty, c when exactly one is.
-pub fn ospa(x: &[Point2], y: &[Point2], cfg: &OspaConfig) -> Result<Ospa> {
+pub fn ospa(x: &[Vec2], y: &[Vec2], cfg: &OspaConfig) -> Result<Ospa> {
     cfg.check()?;
     check_points(x, "OSPA points")?;
     check_points(y, "OSPA points")?;
@@ -121,7 +121,7 @@ pub fn ospa(x: &[Point2], y: &[Point2], cfg: &OspaConfig) -> Result<Ospa> {
 }
 
 /// GOSPA with α = 2 between truth `x` and estimates `y`.
-pub fn gospa(x: &[Point2], y: &[Point2], cfg: &OspaConfig) -> Result<Gospa> {
+pub fn gospa(x: &[Vec2], y: &[Vec2], cfg: &OspaConfig) -> Result<Gospa> {
     cfg.check()?;
     check_points(x, "GOSPA points")?;
     check_points(y, "GOSPA points")?;
@@ -146,7 +146,7 @@ pub fn gospa(x: &[Point2], y: &[Point2], cfg: &OspaConfig) -> Result<Gospa> {
 }
 
 /// The positions of every track point at each frame from `first` to `last`.
-fn positions_at(set: &TrackSet, first: Frame, last: Frame) -> Vec<Vec<Point2>> {
+fn positions_at(set: &TrackSet, first: Frame, last: Frame) -> Vec<Vec<Vec2>> {
     let mut out = vec![Vec::new(); (last - first + 1) as usize];
     for t in set.tracks() {
         for p in t.points() {
@@ -181,7 +181,7 @@ pub fn gospa_over_time(
 fn per_frame<M>(
     gt: &TrackSet,
     pred: &TrackSet,
-    metric: impl Fn(&[Point2], &[Point2]) -> Result<M>,
+    metric: impl Fn(&[Vec2], &[Vec2]) -> Result<M>,
 ) -> Result<Vec<(Frame, M)>> {
     let range = match (gt.frame_range(), pred.frame_range()) {
         (None, None) => return Ok(Vec::new()),

@@ -6,7 +6,7 @@
 use std::collections::{HashMap, HashSet};
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{Frame, Origin, Point2, Scan, Track, TrackSet};
+use tracker_model::{Frame, Origin, Scan, Track, TrackSet, Vec2};
 
 use crate::error::{Error, Result};
 use crate::identity;
@@ -29,7 +29,7 @@ pub struct Mae {
 }
 
 /// MAE of `estimate` against `truth`, point by point.
-pub fn mae(truth: &[Point2], estimate: &[Point2]) -> Result<Mae> {
+pub fn mae(truth: &[Vec2], estimate: &[Vec2]) -> Result<Mae> {
     if truth.len() != estimate.len() {
         return Err(Error::Incompatible(format!(
             "MAE needs as many estimates as truth points ({} vs {})",

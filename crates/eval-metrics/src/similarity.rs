@@ -2,7 +2,7 @@
 //! similarity of points, both in [0, 1] so that every metric uses one threshold convention.
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{BoundingBox, Location, Point2};
+use tracker_model::{BoundingBox, Location, Vec2};
 
 use crate::error::{Error, Result};
 
@@ -90,7 +90,7 @@ impl Similarity {
                 }
             }
             Similarity::Distance { zero_at } => {
-                let h: Vec<Point2> = pred.iter().map(Location::position).collect();
+                let h: Vec<Vec2> = pred.iter().map(Location::position).collect();
                 for a in gt {
                     let pa = a.position();
                     out.extend(

@@ -10,7 +10,7 @@ use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tracker_model::{
-    BoundingBox, Measurement, Origin, Point2, Scan, Track, TrackId, TrackPoint, TrackSet,
+    BoundingBox, Measurement, Origin, Scan, Track, TrackId, TrackPoint, TrackSet, Vec2,
 };
 
 use crate::*;
@@ -27,7 +27,7 @@ fn boxes(desc: Desc<'_>) -> TrackSet {
 
 fn points(desc: Desc<'_>) -> TrackSet {
     // Box centres, so the two representations describe the same scene.
-    build(desc, |f, x| TrackPoint::at(f, Point2::new(x + 5.0, 5.0)))
+    build(desc, |f, x| TrackPoint::at(f, Vec2::new(x + 5.0, 5.0)))
 }
 
 fn build(desc: Desc<'_>, point: impl Fn(u32, f64) -> TrackPoint) -> TrackSet {
@@ -452,7 +452,7 @@ fn identity_assignment_matches_brute_force() {
                     for f in 1..=8u32 {
                         if rng.random_bool(0.6) {
                             let x = 10.0 * rng.random_range(0..3) as f64;
-                            pts.push(TrackPoint::at(f, Point2::new(x, 0.0)));
+                            pts.push(TrackPoint::at(f, Vec2::new(x, 0.0)));
                         }
                     }
                     Track::from_points(TrackId(id), pts).unwrap()
@@ -493,8 +493,8 @@ fn identity_assignment_matches_brute_force() {
 // ---------------------------------------------------------------------------------------------
 // OSPA and GOSPA
 
-fn p(x: f64, y: f64) -> Point2 {
-    Point2::new(x, y)
+fn p(x: f64, y: f64) -> Vec2 {
+    Vec2::new(x, y)
 }
 
 #[test]
@@ -571,7 +571,7 @@ fn gospa_hand_cases() {
     assert_eq!(g.distance, 0.0);
 }
 
-fn point_set() -> impl Strategy<Value = Vec<Point2>> {
+fn point_set() -> impl Strategy<Value = Vec<Vec2>> {
     prop::collection::vec(
         (-20.0f64..20.0, -20.0f64..20.0).prop_map(|(x, y)| p(x, y)),
         0..6,
@@ -582,7 +582,7 @@ proptest! {
     #[test]
     fn ospa_is_a_metric(x in point_set(), y in point_set(), z in point_set(), c in 1.0f64..30.0, order in 1.0f64..3.0) {
         let cfg = OspaConfig { cutoff: c, order };
-        let d = |a: &[Point2], b: &[Point2]| ospa(a, b, &cfg).unwrap().distance;
+        let d = |a: &[Vec2], b: &[Vec2]| ospa(a, b, &cfg).unwrap().distance;
         prop_assert!(d(&x, &x).abs() < 1e-9);
         prop_assert!((d(&x, &y) - d(&y, &x)).abs() < 1e-9);
         prop_assert!(d(&x, &z) <= d(&x, &y) + d(&y, &z) + 1e-9);

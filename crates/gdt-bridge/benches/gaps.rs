@@ -5,13 +5,13 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use gdt_bridge::{Baseline, GdtConfig, Observation, recover_baseline, recover_gdt};
-use tracker_model::Point2;
+use tracker_model::Vec2;
 
 fn segments(k: usize) -> (Vec<Observation>, Vec<Observation>) {
     let v = 1.0 + 0.001 * k as f64;
     let obs = |f: u32| Observation {
         frame: f,
-        position: Point2::new(
+        position: Vec2::new(
             v * f64::from(f) + (f64::from(f) * 0.7).sin(),
             0.5 * f64::from(f),
         ),

@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, Vector2, Vector4};
 use serde::{Deserialize, Serialize};
-use tracker_model::{ConstantVelocity2, CvNoise, Frame, Point2, TransitionModel};
+use tracker_model::{ConstantVelocity2, CvNoise, Frame, TransitionModel, Vec2};
 
 use crate::baselines::{BSplineConfig, linear, lsq_bspline, natural_cubic_spline};
 use crate::error::{Error, Result};
@@ -16,7 +16,7 @@ pub struct Observation {
     /// The frame.
     pub frame: Frame,
     /// Where the object was seen.
-    pub position: Point2,
+    pub position: Vec2,
 }
 
 /// The motion and noise model GDT recovers with.
@@ -56,7 +56,7 @@ pub struct RecoveredGap {
     /// The missing frames, ascending.
     pub frames: Vec<Frame>,
     /// Recovered positions.
-    pub positions: Vec<Point2>,
+    pub positions: Vec<Vec2>,
     /// Position covariances (GDT only; empty for the baselines).
     pub covariances: Vec<Matrix2<f64>>,
 }

@@ -19,8 +19,8 @@
 //!
 //! ```
 //! use gdt_bridge::{GdtConfig, Observation, recover_gdt};
-//! use tracker_model::Point2;
-//! let seg = |f0: u32, n: u32| (f0..f0 + n).map(|f| Observation { frame: f, position: Point2::new(2.0 * f as f64, 1.0) }).collect::<Vec<_>>();
+//! use tracker_model::Vec2;
+//! let seg = |f0: u32, n: u32| (f0..f0 + n).map(|f| Observation { frame: f, position: Vec2::new(2.0 * f as f64, 1.0) }).collect::<Vec<_>>();
 //! let gap = recover_gdt(&seg(0, 10), &seg(20, 10), &GdtConfig::default()).unwrap();
 //! assert_eq!(gap.frames, (10..20).collect::<Vec<_>>());
 //! assert!((gap.positions[5].x - 30.0).abs() < 1.0);

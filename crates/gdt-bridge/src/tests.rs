@@ -4,8 +4,7 @@
 use approx::assert_relative_eq;
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, SMatrix, Vector2, Vector4};
 use tracker_model::{
-    ConstantVelocity2, CvNoise, Gaussian, LinearObservation, Point2, TransitionModel, filter,
-    smooth,
+    ConstantVelocity2, CvNoise, Gaussian, LinearObservation, TransitionModel, Vec2, filter, smooth,
 };
 
 use crate::error::Error;
@@ -205,7 +204,7 @@ fn least_squares_bspline_reproduces_a_cubic() {
 fn gaps_on_a_straight_path_are_recovered_by_every_method() {
     let obs = |f: u32| Observation {
         frame: f,
-        position: Point2::new(3.0 * f64::from(f), 100.0 - 0.5 * f64::from(f)),
+        position: Vec2::new(3.0 * f64::from(f), 100.0 - 0.5 * f64::from(f)),
     };
     let a: Vec<Observation> = (0..15).map(obs).collect();
     let b: Vec<Observation> = (25..40).map(obs).collect();
@@ -273,7 +272,7 @@ fn walker(x0: f64, y0: f64, vx: f64, vy: f64, frames: std::ops::Range<u32>) -> V
     frames
         .map(|f| Observation {
             frame: f,
-            position: Point2::new(x0 + vx * f64::from(f), y0 + vy * f64::from(f)),
+            position: Vec2::new(x0 + vx * f64::from(f), y0 + vy * f64::from(f)),
         })
         .collect()
 }
@@ -380,7 +379,7 @@ fn mask_crossings_become_gaps_by_the_seed_rules() {
             TrackId(id),
             xs.iter()
                 .enumerate()
-                .map(|(f, &x)| TrackPoint::at(f as u32, Point2::new(x, 5.0)))
+                .map(|(f, &x)| TrackPoint::at(f as u32, Vec2::new(x, 5.0)))
                 .collect(),
         )
         .unwrap()
@@ -474,7 +473,7 @@ fn noise_free_constant_velocity_is_recovered_exactly() {
     let goal_state = recover_gdt_goal_state(&a, &b, &cfg).unwrap();
     let lin = recover_baseline(&a, &b, &Baseline::Linear).unwrap();
     for (k, f) in gdt.frames.iter().enumerate() {
-        let truth = Point2::new(10.0 + 2.5 * f64::from(*f), 20.0 - 1.5 * f64::from(*f));
+        let truth = Vec2::new(10.0 + 2.5 * f64::from(*f), 20.0 - 1.5 * f64::from(*f));
         assert!((gdt.positions[k] - truth).norm() < 1e-6, "GDT at frame {f}");
         assert!(
             (goal_state.positions[k] - truth).norm() < 1e-6,

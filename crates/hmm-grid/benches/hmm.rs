@@ -11,7 +11,7 @@ use hmm_grid::{
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tracker_model::Point2;
+use tracker_model::Vec2;
 
 fn grid_model() -> Hmm {
     let grid = CellGrid {
@@ -25,7 +25,7 @@ fn grid_model() -> Hmm {
         .transitions(&SpeedDistribution::new(vec![0.3, 0.7]).unwrap())
         .unwrap();
     let sensors = SensorModel {
-        sensors: vec![Point2::new(5.0, 5.0), Point2::new(15.0, 15.0)],
+        sensors: vec![Vec2::new(5.0, 5.0), Vec2::new(15.0, 15.0)],
         base_sigma: 0.8,
         sigma_per_distance: 0.1,
     };

@@ -5,7 +5,7 @@
 use std::collections::VecDeque;
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{Frame, Point2, Track, TrackId, TrackPoint};
+use tracker_model::{Frame, Track, TrackId, TrackPoint, Vec2};
 
 use crate::error::{Error, Result};
 use crate::model::{Transitions, check_row};
@@ -26,7 +26,7 @@ pub struct CellGrid {
 /// Where a target can be and where it can go in one hop.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StateSpace {
-    positions: Vec<Point2>,
+    positions: Vec<Vec2>,
     neighbours: Vec<Vec<usize>>,
     /// For grids: the state of each cell (row-major), `None` when blocked.
     cell_states: Option<Vec<Option<usize>>>,
@@ -63,7 +63,7 @@ impl StateSpace {
             for c in 0..grid.n_cols {
                 if !blocked[r * grid.n_cols + c] {
                     cell_states[r * grid.n_cols + c] = Some(positions.len());
-                    positions.push(Point2::new(
+                    positions.push(Vec2::new(
                         (c as f64 + 0.5) * grid.cell_size,
                         (r as f64 + 0.5) * grid.cell_size,
                     ));
@@ -104,7 +104,7 @@ impl StateSpace {
     }
 
     /// One state per crossroad of a road graph; `roads` are undirected edges between them.
-    pub fn from_road_graph(crossroads: Vec<Point2>, roads: &[(usize, usize)]) -> Result<Self> {
+    pub fn from_road_graph(crossroads: Vec<Vec2>, roads: &[(usize, usize)]) -> Result<Self> {
         if crossroads.is_empty() {
             return Err(Error::Empty("road graph"));
         }
@@ -145,12 +145,12 @@ impl StateSpace {
     }
 
     /// Where state `i` is.
-    pub fn position(&self, i: usize) -> Point2 {
+    pub fn position(&self, i: usize) -> Vec2 {
         self.positions[i]
     }
 
     /// All positions, by state.
-    pub fn positions(&self) -> &[Point2] {
+    pub fn positions(&self) -> &[Vec2] {
         &self.positions
     }
 
@@ -306,7 +306,7 @@ impl SpeedDistribution {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct SensorModel {
     /// Sensor positions (at least one).
-    pub sensors: Vec<Point2>,
+    pub sensors: Vec<Vec2>,
     /// Position spread right at a sensor (> 0).
     pub base_sigma: f64,
     /// Extra spread per unit of distance to the nearest sensor (≥ 0).

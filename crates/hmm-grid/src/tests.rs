@@ -6,7 +6,7 @@
 use approx::assert_relative_eq;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use tracker_model::{Point2, TrackId, TrackPoint};
+use tracker_model::{TrackId, TrackPoint, Vec2};
 
 use crate::*;
 
@@ -136,7 +136,7 @@ fn sparse_and_dense_paths_agree() {
         .transitions(&SpeedDistribution::new(vec![0.3, 0.6, 0.1]).unwrap())
         .unwrap();
     let sensors = SensorModel {
-        sensors: vec![Point2::new(0.0, 0.0)],
+        sensors: vec![Vec2::new(0.0, 0.0)],
         base_sigma: 0.7,
         sigma_per_distance: 0.1,
     };
@@ -427,7 +427,7 @@ fn maps_build_valid_models() {
     assert_eq!(space.state_of_cell(1, 1, 3), None);
     let corner = space.state_of_cell(0, 0, 3).unwrap();
     assert_eq!(space.neighbours(corner).len(), 2);
-    assert_eq!(space.position(corner), Point2::new(5.0, 5.0));
+    assert_eq!(space.position(corner), Vec2::new(5.0, 5.0));
     // Stay 0.2, one hop 0.8 split over the two neighbours.
     let a = space
         .transitions(&SpeedDistribution::new(vec![0.2, 0.8]).unwrap())
@@ -437,9 +437,9 @@ fn maps_build_valid_models() {
     assert_eq!(a.get(corner, space.state_of_cell(2, 2, 3).unwrap()), 0.0);
     let road = StateSpace::from_road_graph(
         vec![
-            Point2::new(0.0, 0.0),
-            Point2::new(1.0, 0.0),
-            Point2::new(2.0, 0.0),
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(2.0, 0.0),
         ],
         &[(0, 1), (1, 2)],
     )
@@ -452,7 +452,7 @@ fn maps_build_valid_models() {
     assert_relative_eq!(a.get(0, 2), 0.25);
     let b = road
         .sensor_emissions(&SensorModel {
-            sensors: vec![Point2::new(0.0, 0.0)],
+            sensors: vec![Vec2::new(0.0, 0.0)],
             base_sigma: 0.5,
             sigma_per_distance: 0.5,
         })
@@ -465,7 +465,7 @@ fn maps_build_valid_models() {
     }
     // Accuracy falls with distance from the sensor.
     assert!(b[0] > b[2 * 3 + 2]);
-    assert!(StateSpace::from_road_graph(vec![Point2::new(0.0, 0.0)], &[(0, 1)]).is_err());
+    assert!(StateSpace::from_road_graph(vec![Vec2::new(0.0, 0.0)], &[(0, 1)]).is_err());
     assert!(
         StateSpace::from_grid(&CellGrid {
             n_cols: 2,
@@ -494,10 +494,10 @@ fn state_paths_become_tracks() {
     assert_eq!(
         track.points(),
         &[
-            TrackPoint::at(7, Point2::new(5.0, 5.0)),
-            TrackPoint::at(8, Point2::new(5.0, 15.0)),
-            TrackPoint::at(9, Point2::new(15.0, 15.0)),
-            TrackPoint::at(10, Point2::new(15.0, 15.0)),
+            TrackPoint::at(7, Vec2::new(5.0, 5.0)),
+            TrackPoint::at(8, Vec2::new(5.0, 15.0)),
+            TrackPoint::at(9, Vec2::new(15.0, 15.0)),
+            TrackPoint::at(10, Vec2::new(15.0, 15.0)),
         ]
     );
     assert!(space.path_to_track(&[], 0, TrackId(0)).unwrap().is_empty());

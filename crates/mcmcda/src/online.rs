@@ -11,7 +11,7 @@ use std::collections::{BTreeMap, HashMap};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use tracker_model::{Frame, Point2, TrackSet};
+use tracker_model::{Frame, TrackSet, Vec2};
 
 use crate::config::Model;
 use crate::error::{Error, Result};
@@ -53,7 +53,7 @@ pub struct OnlineStep {
     pub frame: Frame,
     /// Position estimates (filtered, predicted over missed scans) of the tracks reported at
     /// this scan, with their persistent labels.
-    pub estimates: Vec<(u64, Point2)>,
+    pub estimates: Vec<(u64, Vec2)>,
     /// Log posterior of the window's MAP.
     pub log_posterior: f64,
 }
@@ -117,7 +117,7 @@ impl OnlineTracker {
 
     /// Adds a measurement that arrived late for `frame`, whose scan must still be open (in
     /// the next window); it is used from the next window on.
-    pub fn add_late(&mut self, frame: Frame, position: Point2) -> Result<MeasId> {
+    pub fn add_late(&mut self, frame: Frame, position: Vec2) -> Result<MeasId> {
         let lo = self.problem.first_frame() + self.open_from as Frame;
         if frame < lo {
             return Err(Error::Invalid(format!(
@@ -129,7 +129,7 @@ impl OnlineTracker {
     }
 
     /// Processes the scan at `frame` (after any empty scans needed to reach it).
-    pub fn push_scan(&mut self, frame: Frame, points: &[Point2]) -> Result<OnlineStep> {
+    pub fn push_scan(&mut self, frame: Frame, points: &[Vec2]) -> Result<OnlineStep> {
         self.problem.push_scan(frame, points)?;
         let hi = self.problem.n_scans() - 1;
         let lo = self.window_start();

@@ -2,7 +2,7 @@
 //! L(y, t, d) = { y' ∈ Y_{t+d} : ‖y − y'‖ ≤ d·v̄·T_s } (TAC 2009 eq. 27), computed once as
 //! measurements arrive and kept in both directions.
 
-use tracker_model::{Frame, Point2, Scan};
+use tracker_model::{Frame, Scan, Vec2};
 
 use crate::config::Model;
 use crate::error::{Error, Result};
@@ -20,7 +20,7 @@ pub struct Problem {
     first_frame: Frame,
     max_gap: usize,
     radius_per_scan: f64,
-    positions: Vec<Point2>,
+    positions: Vec<Vec2>,
     scan_of: Vec<u32>,
     /// Members of each scan, by scan index (frame − first_frame).
     scans: Vec<Vec<MeasId>>,
@@ -51,7 +51,7 @@ impl Problem {
         let first = scans.first().map_or(0, |s| s.frame);
         let mut problem = Self::empty(model, first);
         for scan in scans {
-            let points: Vec<Point2> = scan.measurements.iter().map(|m| m.value).collect();
+            let points: Vec<Vec2> = scan.measurements.iter().map(|m| m.value).collect();
             problem.push_scan(scan.frame, &points)?;
         }
         Ok(problem)
@@ -59,7 +59,7 @@ impl Problem {
 
     /// Appends the scan at `frame` (after any empty scans needed to reach it). Returns the ids
     /// given to `points`, in order.
-    pub fn push_scan(&mut self, frame: Frame, points: &[Point2]) -> Result<Vec<MeasId>> {
+    pub fn push_scan(&mut self, frame: Frame, points: &[Vec2]) -> Result<Vec<MeasId>> {
         let next = self.first_frame + self.scans.len() as Frame;
         if frame < next {
             return Err(Error::Invalid(format!(
@@ -79,7 +79,7 @@ impl Problem {
 
     /// Adds one measurement to the existing scan at `frame` (a late measurement joins its own
     /// scan) and links it into the neighbourhoods.
-    pub fn add_measurement(&mut self, frame: Frame, position: Point2) -> Result<MeasId> {
+    pub fn add_measurement(&mut self, frame: Frame, position: Vec2) -> Result<MeasId> {
         if !(position.x.is_finite() && position.y.is_finite()) {
             return Err(Error::Model(tracker_model::Error::NonFinite {
                 what: "measurement position",
@@ -157,7 +157,7 @@ impl Problem {
     }
 
     /// Position of a measurement.
-    pub fn position(&self, m: MeasId) -> Point2 {
+    pub fn position(&self, m: MeasId) -> Vec2 {
         self.positions[m as usize]
     }
 

@@ -14,7 +14,7 @@ use mcmcda::{
 };
 use phd_filter::{FusionConfig, NoLocalDetectors, PhdConfig, PhdTracker, SmcPhd};
 use serde::Deserialize;
-use tracker_model::{BoundingBox, Frame, MotRow, Point2, Track, TrackPoint, TrackSet};
+use tracker_model::{BoundingBox, Frame, MotRow, Track, TrackPoint, TrackSet, Vec2};
 
 /// Which tracker runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -133,11 +133,7 @@ fn track_points(
     }
     let detections: Vec<MotRow> = by_frame.values().flatten().copied().collect();
     let first = by_frame.keys().next().copied().unwrap_or(0);
-    let centres = |dets: &[MotRow]| {
-        dets.iter()
-            .map(|d| d.bbox.centre())
-            .collect::<Vec<Point2>>()
-    };
+    let centres = |dets: &[MotRow]| dets.iter().map(|d| d.bbox.centre()).collect::<Vec<Vec2>>();
     let (associations, problem): (Vec<(u64, Vec<MeasId>)>, Problem) = if tracker == Tracker::Mcmcda
     {
         let mut online = OnlineTracker::new(model.clone(), first, settings.online, seed)?;

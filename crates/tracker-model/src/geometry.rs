@@ -6,8 +6,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 
-/// A point in the plane.
-pub type Point2 = Vector2<f64>;
+/// A vector in the plane: a position, a velocity or an offset. (Not nalgebra's `Point2`,
+/// which is a different type; this is its `Vector2<f64>`.)
+pub type Vec2 = Vector2<f64>;
 
 /// An axis-aligned box [lower, upper] in `D` dimensions: the surveillance region.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -97,7 +98,7 @@ impl<const D: usize> Region<D> {
 impl Region<2> {
     /// The square [0, side]², as in the MCMCDA experiments.
     pub fn square(side: f64) -> Result<Self> {
-        Self::new(Point2::zeros(), Point2::new(side, side))
+        Self::new(Vec2::zeros(), Vec2::new(side, side))
     }
 }
 
@@ -142,7 +143,7 @@ impl BoundingBox {
     }
 
     /// A box of the given size centred on `centre`.
-    pub fn from_centre(centre: Point2, width: f64, height: f64) -> Result<Self> {
+    pub fn from_centre(centre: Vec2, width: f64, height: f64) -> Result<Self> {
         Self::new(
             centre.x - width / 2.0,
             centre.y - height / 2.0,
@@ -153,8 +154,8 @@ impl BoundingBox {
 
     /// The centre point.
     #[inline]
-    pub fn centre(&self) -> Point2 {
-        Point2::new(self.left + self.width / 2.0, self.top + self.height / 2.0)
+    pub fn centre(&self) -> Vec2 {
+        Vec2::new(self.left + self.width / 2.0, self.top + self.height / 2.0)
     }
 
     /// x of the right edge.
@@ -194,7 +195,7 @@ impl BoundingBox {
 }
 
 /// Bearing from `from` to `to` in radians, counter-clockwise from the +x axis, in (−π, π].
-pub fn bearing_rad(from: &Point2, to: &Point2) -> f64 {
+pub fn bearing_rad(from: &Vec2, to: &Vec2) -> f64 {
     let d = to - from;
     d.y.atan2(d.x)
 }

@@ -5,7 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result, ensure_positive};
-use crate::geometry::{Point2, Region2};
+use crate::geometry::{Region2, Vec2};
 
 /// A non-negative value per cell over a region, row-major with row 0 at the region's lower y.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -21,7 +21,7 @@ pub struct LikelihoodGrid {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Peak {
     /// Centre of the peak cell.
-    pub position: Point2,
+    pub position: Vec2,
     /// The grid value there.
     pub value: f64,
 }
@@ -74,7 +74,7 @@ impl LikelihoodGrid {
     pub fn from_fn(
         region: Region2,
         cell_size: f64,
-        mut f: impl FnMut(Point2) -> f64,
+        mut f: impl FnMut(Vec2) -> f64,
     ) -> Result<Self> {
         let mut grid = Self::zeros(region, cell_size)?;
         for row in 0..grid.n_rows {
@@ -107,16 +107,16 @@ impl LikelihoodGrid {
     }
 
     /// Centre of cell (`col`, `row`).
-    pub fn cell_centre(&self, col: usize, row: usize) -> Point2 {
+    pub fn cell_centre(&self, col: usize, row: usize) -> Vec2 {
         self.region.lower()
-            + Point2::new(
+            + Vec2::new(
                 (col as f64 + 0.5) * self.cell_size,
                 (row as f64 + 0.5) * self.cell_size,
             )
     }
 
     /// The cell containing `p`, if it lies in the grid.
-    pub fn cell_of(&self, p: &Point2) -> Option<(usize, usize)> {
+    pub fn cell_of(&self, p: &Vec2) -> Option<(usize, usize)> {
         let rel = (p - self.region.lower()) / self.cell_size;
         if rel.x < 0.0 || rel.y < 0.0 || !rel.x.is_finite() || !rel.y.is_finite() {
             return None;

@@ -49,7 +49,7 @@ pub use gaussian::{
     CholeskyFactor, Gaussian, LN_2PI, check_finite_matrix, check_positive_semidefinite,
     check_symmetric, cholesky_checked,
 };
-pub use geometry::{BoundingBox, Point2, Region, Region2, bearing_rad, wrap_angle_rad};
+pub use geometry::{BoundingBox, Region, Region2, Vec2, bearing_rad, wrap_angle_rad};
 pub use grid::{LikelihoodGrid, Peak, PeakConfig};
 pub use kalman::{FilterRun, FilterStep, filter, smooth};
 pub use models::{

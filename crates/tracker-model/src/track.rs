@@ -6,7 +6,7 @@ use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::geometry::{BoundingBox, Point2};
+use crate::geometry::{BoundingBox, Vec2};
 
 /// A frame (scan) index: a tick of the one clock that every tracker works on. MOTChallenge
 /// frames start at 1; simulated scans at 0. A model's sampling period (`dt_s`) is the time
@@ -103,7 +103,7 @@ pub enum Origin {
 
 /// One measurement of a scan.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Measurement<Z = Point2> {
+pub struct Measurement<Z = Vec2> {
     /// The measured value (a point by default; a box for image detectors).
     pub value: Z,
     /// The hidden true origin, for evaluation only.
@@ -112,7 +112,7 @@ pub struct Measurement<Z = Point2> {
 
 /// All measurements taken at one frame.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Scan<Z = Point2> {
+pub struct Scan<Z = Vec2> {
     /// The frame index.
     pub frame: Frame,
     /// Measurements in arbitrary order.
@@ -124,14 +124,14 @@ pub struct Scan<Z = Point2> {
 #[serde(rename_all = "snake_case")]
 pub enum Location {
     /// A point in the plane.
-    Point(Point2),
+    Point(Vec2),
     /// An image bounding box.
     Box(BoundingBox),
 }
 
 impl Location {
     /// The point, or the box centre.
-    pub fn position(&self) -> Point2 {
+    pub fn position(&self) -> Vec2 {
         match self {
             Location::Point(p) => *p,
             Location::Box(b) => b.centre(),
@@ -154,7 +154,7 @@ pub struct TrackPoint {
 
 impl TrackPoint {
     /// A point estimate with nothing else.
-    pub fn at(frame: Frame, position: Point2) -> Self {
+    pub fn at(frame: Frame, position: Vec2) -> Self {
         Self {
             frame,
             location: Location::Point(position),

@@ -14,7 +14,7 @@ use rand::{Rng, RngExt};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::Deserialize;
-use tracker_model::{Point2, Region2, Track, TrackId, TrackPoint, TrackSet};
+use tracker_model::{Region2, Track, TrackId, TrackPoint, TrackSet, Vec2};
 
 use crate::{Chart, Clock, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
 
@@ -117,8 +117,8 @@ pub struct Output {
     n_frames: u32,
     /// Walkers kept (at least three frames in view).
     n_walkers: usize,
-    mask_lower: Point2,
-    mask_upper: Point2,
+    mask_lower: Vec2,
+    mask_upper: Vec2,
     n_gaps: usize,
     /// Hidden positions over all gaps.
     n_hidden: usize,
@@ -215,7 +215,7 @@ fn evaluate(
         .collect::<gdt_bridge::Result<_>>()?;
     let micros = (clock.now_s() - start) * 1e6 / cases.len() as f64;
     for ((case, _, _), r) in cases.iter().zip(&recovered) {
-        let t: Vec<Point2> = case.hidden.iter().map(|o| o.position).collect();
+        let t: Vec<Vec2> = case.hidden.iter().map(|o| o.position).collect();
         per_gap.push(mae(&t, &r.positions)?);
         all_truth.extend(t);
         all_est.extend(r.positions.iter().copied());

@@ -14,7 +14,7 @@ use hmm_grid::{
 use rand::{Rng, RngExt};
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
-use tracker_model::{Frame, Point2, Track, TrackId};
+use tracker_model::{Frame, Track, TrackId, Vec2};
 
 use crate::{Chart, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
 
@@ -70,7 +70,7 @@ pub struct Params {
 
 fn sensor_model(p: &Params, s: &SensorParams) -> SensorModel {
     SensorModel {
-        sensors: p.sensors.iter().map(|q| Point2::new(q[0], q[1])).collect(),
+        sensors: p.sensors.iter().map(|q| Vec2::new(q[0], q[1])).collect(),
         base_sigma: s.base_sigma,
         sigma_per_distance: s.sigma_per_distance,
     }
@@ -288,7 +288,7 @@ impl Pipeline for HmmTracking {
         let n_train = *p.train_sizes.last().unwrap_or(&0);
         let space = match &p.map {
             MapParams::Road { crossroads, roads } => StateSpace::from_road_graph(
-                crossroads.iter().map(|c| Point2::new(c[0], c[1])).collect(),
+                crossroads.iter().map(|c| Vec2::new(c[0], c[1])).collect(),
                 &roads.iter().map(|r| (r[0], r[1])).collect::<Vec<_>>(),
             )?,
             MapParams::Grid(grid) => StateSpace::from_grid(grid)?,

@@ -8,7 +8,7 @@ use mcmcda::{
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
-use tracker_model::{Point2, Simulation, SimulationConfig, TrackPoint, TrackSet};
+use tracker_model::{Simulation, SimulationConfig, TrackPoint, TrackSet, Vec2};
 
 use crate::{Chart, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
 
@@ -75,7 +75,7 @@ fn track(
     let start = env.clock.now_s();
     let mut steps = Vec::with_capacity(sim.scans.len());
     for scan in &sim.scans {
-        let points: Vec<Point2> = scan.measurements.iter().map(|m| m.value).collect();
+        let points: Vec<Vec2> = scan.measurements.iter().map(|m| m.value).collect();
         steps.push(tracker.push_scan(scan.frame, &points)?);
         env.progress.advance(1);
     }
@@ -93,11 +93,11 @@ fn step_series(steps: &[OnlineStep], truth: &TrackSet, cfg: &OspaConfig) -> Resu
     let mut count_est = Vec::new();
     let mut count_true = Vec::new();
     for step in steps {
-        let truth: Vec<Point2> = truth_by_frame
+        let truth: Vec<Vec2> = truth_by_frame
             .get(&step.frame)
             .map(|v| v.iter().map(|(_, tp)| tp.location.position()).collect())
             .unwrap_or_default();
-        let est: Vec<Point2> = step.estimates.iter().map(|(_, p)| *p).collect();
+        let est: Vec<Vec2> = step.estimates.iter().map(|(_, p)| *p).collect();
         let x = f64::from(step.frame);
         ospa_series.push((x, eval_metrics::ospa(&truth, &est, cfg)?.distance));
         count_est.push((x, est.len() as f64));
