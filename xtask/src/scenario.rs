@@ -257,40 +257,44 @@ fn bless(scenario: &Scenario, metrics: &Metrics) -> Result<()> {
     fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
 }
 
-/// Checks (or blesses) every result, printing one line per scenario; true when all pass.
+/// Checks (or blesses) every result, printing one line per scenario; true when all pass. A
+/// claim that does not hold fails its scenario even when blessing.
 #[expect(clippy::print_stdout, reason = "the suite reports on the terminal")]
 pub fn check_results(results: &[RunResult], bless_results: bool) -> Result<bool> {
     let mut all_ok = true;
     for r in results {
-        let secs = r.elapsed.as_secs_f64();
-        match &r.output {
+        let (name, secs) = (&r.scenario.name, r.elapsed.as_secs_f64());
+        let out = match &r.output {
+            Ok(out) => out,
             Err(err) => {
                 all_ok = false;
-                println!("FAIL {:<28} {secs:>7.2}s  error: {err:#}", r.scenario.name);
+                println!("FAIL {name:<28} {secs:>7.2}s  error: {err:#}");
+                continue;
             }
-            Ok(out) if bless_results => {
-                bless(&r.scenario, &out.metrics)?;
-                println!(
-                    "bless {:<27} {secs:>7.2}s  {} metrics written",
-                    r.scenario.name,
-                    out.metrics.len()
-                );
-            }
-            Ok(out) => {
-                let problems = compare(&r.scenario, &out.metrics)?;
-                if problems.is_empty() {
-                    println!(
-                        "ok   {:<28} {secs:>7.2}s  {} metrics match",
-                        r.scenario.name,
-                        out.metrics.len()
-                    );
-                } else {
-                    all_ok = false;
-                    println!("FAIL {:<28} {secs:>7.2}s", r.scenario.name);
-                    for p in problems {
-                        println!("       {p}");
-                    }
-                }
+        };
+        let mut problems: Vec<String> = out
+            .failed_claims()
+            .map(|c| format!("claim does not hold: {}", c.statement))
+            .collect();
+        let verdict = if bless_results {
+            bless(&r.scenario, &out.metrics)?;
+            format!("{} metrics written", out.metrics.len())
+        } else {
+            problems.extend(compare(&r.scenario, &out.metrics)?);
+            format!("{} metrics match", out.metrics.len())
+        };
+        let claims = match out.claims.len() {
+            0 => String::new(),
+            n => format!(", {n} claims hold"),
+        };
+        if problems.is_empty() {
+            let word = if bless_results { "bless" } else { "ok" };
+            println!("{word:<4} {name:<28} {secs:>7.2}s  {verdict}{claims}");
+        } else {
+            all_ok = false;
+            println!("FAIL {name:<28} {secs:>7.2}s");
+            for p in problems {
+                println!("       {p}");
             }
         }
     }

@@ -7,7 +7,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::Result;
-use crate::sequence::Sequence;
+use crate::sequence::{FrameData, Sequence};
 
 /// The CLEAR MOT counts and scores.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -66,18 +66,7 @@ pub fn clear_mot(seq: &Sequence, threshold: f64) -> Result<ClearMetrics> {
         }
         previous_frame = Some(f.frame);
         let (ng, np) = (f.gt.len(), f.pred.len());
-        scores.clear();
-        for (i, &g) in f.gt.iter().enumerate() {
-            for (j, &h) in f.pred.iter().enumerate() {
-                let s = f.sim(i, j);
-                let kept = prev_frame_match[g] == Some(h);
-                scores.push(if s < threshold - eps {
-                    0.0
-                } else {
-                    s + if kept { 1000.0 } else { 0.0 }
-                });
-            }
-        }
+        assignment_scores(f, &prev_frame_match, threshold, &mut scores);
         current.iter_mut().for_each(|m| *m = None);
         let mut n_matched = 0;
         for (i, j) in tracker_model::assignment::maximise(ng, np, &scores)? {
@@ -105,20 +94,7 @@ pub fn clear_mot(seq: &Sequence, threshold: f64) -> Result<ClearMetrics> {
         fn_ += ng - n_matched;
         fp += np - n_matched;
     }
-    let (mut mt, mut pt, mut ml) = (0, 0, 0);
-    for g in 0..n_gt {
-        if present_frames[g] == 0 {
-            continue;
-        }
-        let ratio = matched_frames[g] as f64 / present_frames[g] as f64;
-        if ratio > 0.8 {
-            mt += 1;
-        } else if ratio >= 0.2 {
-            pt += 1;
-        } else {
-            ml += 1;
-        }
-    }
+    let (mt, pt, ml) = coverage_classes(&present_frames, &matched_frames);
     let n_gt_dets = (tp + fn_) as f64;
     let denom = n_gt_dets.max(1.0);
     Ok(ClearMetrics {
@@ -137,4 +113,46 @@ pub fn clear_mot(seq: &Sequence, threshold: f64) -> Result<ClearMetrics> {
         mostly_lost: ml,
         n_gt_tracks: n_gt,
     })
+}
+
+/// The assignment scores of one frame, row-major: the similarity where it reaches the
+/// threshold (0 elsewhere), plus 1000 for a pair that was matched in the previous frame.
+fn assignment_scores(
+    f: &FrameData,
+    prev_frame_match: &[Option<usize>],
+    threshold: f64,
+    scores: &mut Vec<f64>,
+) {
+    scores.clear();
+    for (i, &g) in f.gt.iter().enumerate() {
+        for (j, &h) in f.pred.iter().enumerate() {
+            let s = f.sim(i, j);
+            let kept = prev_frame_match[g] == Some(h);
+            scores.push(if s < threshold - f64::EPSILON {
+                0.0
+            } else {
+                s + if kept { 1000.0 } else { 0.0 }
+            });
+        }
+    }
+}
+
+/// Mostly tracked (matched in more than 80 % of its frames), partially tracked and mostly lost
+/// (less than 20 %) truth tracks; tracks never present are not counted.
+fn coverage_classes(present_frames: &[usize], matched_frames: &[usize]) -> (usize, usize, usize) {
+    let (mut mt, mut pt, mut ml) = (0, 0, 0);
+    for (&present, &matched) in present_frames.iter().zip(matched_frames) {
+        if present == 0 {
+            continue;
+        }
+        let ratio = matched as f64 / present as f64;
+        if ratio > 0.8 {
+            mt += 1;
+        } else if ratio >= 0.2 {
+            pt += 1;
+        } else {
+            ml += 1;
+        }
+    }
+    (mt, pt, ml)
 }

@@ -1,5 +1,25 @@
 //! The error type of eval-metrics.
 
+use std::fmt;
+
+/// Which side of an evaluation an input comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    /// The ground truth.
+    Truth,
+    /// The tracker's estimates.
+    Estimate,
+}
+
+impl fmt::Display for Side {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Side::Truth => "truth",
+            Side::Estimate => "estimate",
+        })
+    }
+}
+
 /// What can go wrong when scoring.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {
@@ -14,9 +34,34 @@ pub enum Error {
         /// What is wrong, with the value.
         reason: String,
     },
-    /// Inputs that cannot be compared (different lengths, boxes against points with IoU, ...).
-    #[error("incompatible inputs: {0}")]
-    Incompatible(String),
+    /// IoU similarity on a point: IoU needs boxes on both sides.
+    #[error(
+        "IoU similarity needs boxes, but the {side} contains a point; use a distance similarity"
+    )]
+    IouNeedsBoxes {
+        /// The side with the point.
+        side: Side,
+    },
+    /// Two inputs that must have the same length do not.
+    #[error("{what}: expected {expected}, got {got}")]
+    LengthMismatch {
+        /// What was counted, e.g. "MAE estimates (one per truth point)".
+        what: &'static str,
+        /// The length the other input implies.
+        expected: usize,
+        /// The length given.
+        got: usize,
+    },
+    /// A scan whose labels do not match its measurements one to one.
+    #[error("scan {scan} has {n_measurements} measurements but {n_labels} labels")]
+    ScanLabelsMismatch {
+        /// The scan's index.
+        scan: usize,
+        /// Its measurements.
+        n_measurements: usize,
+        /// The labels given for it.
+        n_labels: usize,
+    },
 }
 
 /// Result with eval-metrics' [`Error`].

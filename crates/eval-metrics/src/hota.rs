@@ -44,11 +44,26 @@ struct FrameMatches {
     pairs: Vec<(u32, f64)>,
 }
 
+/// Result of the first pass: detections per object and the global alignment of every pair.
+struct Alignment {
+    /// Detections of each truth object.
+    gt_count: Vec<f64>,
+    /// Detections of each estimated object.
+    pred_count: Vec<f64>,
+    /// Global alignment score of each (truth, estimate) pair of the sequence.
+    score: Vec<f64>,
+}
+
+/// Matches counted at each α: true positives, summed similarity, and per-pair match counts.
+struct AlphaCounts {
+    tp: Vec<f64>,
+    loc: Vec<f64>,
+    pair_counts: Vec<[f64; ALPHAS.len()]>,
+}
+
 /// Computes HOTA over an aligned sequence. Frames are assigned in parallel; the reduction runs
 /// in frame order, so the result does not depend on the thread count.
 pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
-    let n_gt = seq.n_gt_dets as f64;
-    let n_pred = seq.n_pred_dets as f64;
     if seq.n_gt_dets == 0 || seq.n_pred_dets == 0 {
         // TrackEval: nothing can match; every score but LocA is 0 and LocA is 1.
         return Ok(HotaMetrics {
@@ -63,7 +78,15 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
             per_alpha: vec![0.0; ALPHAS.len()],
         });
     }
-    // Pass 1: potential matches, soft-counted per frame, and object sizes.
+    let alignment = align(seq);
+    let matches = match_frames(seq, &alignment.score)?;
+    let counts = count_per_alpha(seq, &matches);
+    Ok(scores(seq, &alignment, &counts))
+}
+
+/// Pass 1: potential matches, soft-counted per frame, and object sizes, giving each pair's
+/// global alignment score.
+fn align(seq: &Sequence) -> Alignment {
     let mut gt_count = vec![0.0f64; seq.gt_ids.len()];
     let mut pred_count = vec![0.0f64; seq.pred_ids.len()];
     let mut potential = vec![0.0f64; seq.pairs.len()];
@@ -83,15 +106,23 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
         f.gt.iter().for_each(|&g| gt_count[g] += 1.0);
         f.pred.iter().for_each(|&h| pred_count[h] += 1.0);
     }
-    let alignment: Vec<f64> = seq
+    let score = seq
         .pairs
         .iter()
         .zip(&potential)
         .map(|(&(g, h), &p)| p / (gt_count[g] + pred_count[h] - p))
         .collect();
-    // Pass 2: per-frame assignment maximising alignment × similarity.
-    let matches: Vec<FrameMatches> = seq
-        .frames
+    Alignment {
+        gt_count,
+        pred_count,
+        score,
+    }
+}
+
+/// Pass 2: per-frame assignment maximising alignment × similarity (frames in parallel,
+/// collected in frame order).
+fn match_frames(seq: &Sequence, alignment: &[f64]) -> Result<Vec<FrameMatches>> {
+    seq.frames
         .par_iter()
         .map(|f| {
             let np = f.pred.len();
@@ -114,13 +145,17 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
                 .collect();
             Ok(FrameMatches { pairs })
         })
-        .collect::<Result<_>>()?;
-    // Reduce per α: TP counts, localisation sums and per-pair match counts.
+        .collect()
+}
+
+/// Reduces the matches per α, in frame order: TP counts, localisation sums and per-pair match
+/// counts.
+fn count_per_alpha(seq: &Sequence, matches: &[FrameMatches]) -> AlphaCounts {
     let n_alpha = ALPHAS.len();
     let mut tp = vec![0.0f64; n_alpha];
     let mut loc = vec![0.0f64; n_alpha];
-    let mut pair_counts = vec![[0.0f64; 19]; seq.pairs.len()];
-    for fm in &matches {
+    let mut pair_counts = vec![[0.0f64; ALPHAS.len()]; seq.pairs.len()];
+    for fm in matches {
         for &(pair, s) in &fm.pairs {
             let counts = &mut pair_counts[pair as usize];
             for (a, alpha) in ALPHAS.iter().enumerate() {
@@ -132,6 +167,19 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
             }
         }
     }
+    AlphaCounts {
+        tp,
+        loc,
+        pair_counts,
+    }
+}
+
+/// The detection, association and localisation scores at each α, and their means over α.
+fn scores(seq: &Sequence, alignment: &Alignment, counts: &AlphaCounts) -> HotaMetrics {
+    let n_gt = seq.n_gt_dets as f64;
+    let n_pred = seq.n_pred_dets as f64;
+    let (gt_count, pred_count) = (&alignment.gt_count, &alignment.pred_count);
+    let n_alpha = ALPHAS.len();
     let mut out = HotaMetrics {
         hota: 0.0,
         det_a: 0.0,
@@ -144,11 +192,11 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
         per_alpha: Vec::with_capacity(n_alpha),
     };
     for a in 0..n_alpha {
-        let tp_a = tp[a];
+        let tp_a = counts.tp[a];
         let (fn_a, fp_a) = (n_gt - tp_a, n_pred - tp_a);
         let (mut ass_a, mut ass_re, mut ass_pr) = (0.0, 0.0, 0.0);
-        for (&(g, h), counts) in seq.pairs.iter().zip(&pair_counts) {
-            let m = counts[a];
+        for (&(g, h), pair_counts) in seq.pairs.iter().zip(&counts.pair_counts) {
+            let m = pair_counts[a];
             if m > 0.0 {
                 let (ng, nh) = (gt_count[g], pred_count[h]);
                 ass_a += m * m / (ng + nh - m);
@@ -168,7 +216,7 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
         out.ass_pr += ass_pr;
         out.det_re += tp_a / (tp_a + fn_a).max(1.0);
         out.det_pr += tp_a / (tp_a + fp_a).max(1.0);
-        out.loc_a += loc[a].max(1e-10) / tp_a.max(1e-10);
+        out.loc_a += counts.loc[a].max(1e-10) / tp_a.max(1e-10);
     }
     let k = n_alpha as f64;
     for v in [
@@ -183,5 +231,5 @@ pub fn hota(seq: &Sequence) -> Result<HotaMetrics> {
     ] {
         *v /= k;
     }
-    Ok(out)
+    out
 }

@@ -2,12 +2,14 @@
 //! García-Fernández & Svensson, FUSION 2017) between finite sets of points.
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{Frame, TrackSet, Vec2};
+use tracker_model::{Frame, TrackSet, Vec2, ensure_positive};
 
 use crate::error::{Error, Result};
 
-/// Cut-off c and order p of OSPA and GOSPA.
+/// Cut-off c and order p of OSPA and GOSPA; checked by [`OspaConfig::check`] in every
+/// function that takes one.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct OspaConfig {
     /// c > 0: the largest distance a pair can contribute, and the price of a cardinality error.
     pub cutoff: f64,
@@ -18,12 +20,7 @@ pub struct OspaConfig {
 impl OspaConfig {
     /// Checks c > 0 and p ≥ 1 (both finite).
     pub fn check(&self) -> Result<()> {
-        if !(self.cutoff.is_finite() && self.cutoff > 0.0) {
-            return Err(Error::InvalidParameter {
-                name: "OSPA cut-off c",
-                reason: format!("{} must be finite and > 0", self.cutoff),
-            });
-        }
+        ensure_positive(self.cutoff, "OSPA cut-off c")?;
         if !(self.order.is_finite() && self.order >= 1.0) {
             return Err(Error::InvalidParameter {
                 name: "OSPA order p",
@@ -98,6 +95,11 @@ fn cutoff_assignment(
 /// OSPA between two point sets; 0 when both are empty, c when exactly one is.
 pub fn ospa(x: &[Vec2], y: &[Vec2], cfg: &OspaConfig) -> Result<Ospa> {
     cfg.check()?;
+    ospa_checked(x, y, cfg)
+}
+
+/// [`ospa`] with a checked configuration.
+fn ospa_checked(x: &[Vec2], y: &[Vec2], cfg: &OspaConfig) -> Result<Ospa> {
     check_points(x, "OSPA points")?;
     check_points(y, "OSPA points")?;
     let (small, large) = if x.len() <= y.len() { (x, y) } else { (y, x) };
@@ -123,6 +125,11 @@ pub fn ospa(x: &[Vec2], y: &[Vec2], cfg: &OspaConfig) -> Result<Ospa> {
 /// GOSPA with α = 2 between truth `x` and estimates `y`.
 pub fn gospa(x: &[Vec2], y: &[Vec2], cfg: &OspaConfig) -> Result<Gospa> {
     cfg.check()?;
+    gospa_checked(x, y, cfg)
+}
+
+/// [`gospa`] with a checked configuration.
+fn gospa_checked(x: &[Vec2], y: &[Vec2], cfg: &OspaConfig) -> Result<Gospa> {
     check_points(x, "GOSPA points")?;
     check_points(y, "GOSPA points")?;
     let (_, close) = cutoff_assignment(x, y, cfg)?;
@@ -165,7 +172,8 @@ pub fn ospa_over_time(
     pred: &TrackSet,
     cfg: &OspaConfig,
 ) -> Result<Vec<(Frame, Ospa)>> {
-    per_frame(gt, pred, |x, y| ospa(x, y, cfg))
+    cfg.check()?;
+    per_frame(gt, pred, |x, y| ospa_checked(x, y, cfg))
 }
 
 /// GOSPA at every frame of the union of both sets' frame ranges.
@@ -174,7 +182,8 @@ pub fn gospa_over_time(
     pred: &TrackSet,
     cfg: &OspaConfig,
 ) -> Result<Vec<(Frame, Gospa)>> {
-    per_frame(gt, pred, |x, y| gospa(x, y, cfg))
+    cfg.check()?;
+    per_frame(gt, pred, |x, y| gospa_checked(x, y, cfg))
 }
 
 /// `metric` between the two sets' positions at each frame of the union of their ranges.

@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use rayon::prelude::*;
 use tracker_model::{Frame, Location, TrackId, TrackPoint, TrackSet};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Side};
 use crate::similarity::Similarity;
 
 /// Marks a frame entry whose similarity is 0 (the pair is not in [`Sequence::pairs`]).
@@ -90,16 +90,14 @@ impl Sequence {
     /// Aligns `gt` and `pred` and computes every similarity (frames in parallel).
     pub fn new(gt: &TrackSet, pred: &TrackSet, similarity: Similarity) -> Result<Self> {
         if similarity == Similarity::Iou {
-            for (set, side) in [(gt, "truth"), (pred, "estimate")] {
+            for (set, side) in [(gt, Side::Truth), (pred, Side::Estimate)] {
                 let has_point = set
                     .tracks()
                     .iter()
                     .flat_map(|t| t.points())
                     .any(|p| !matches!(p.location, Location::Box(_)));
                 if has_point {
-                    return Err(Error::Incompatible(format!(
-                        "IoU similarity needs boxes, but the {side} tracks contain points; use a distance similarity"
-                    )));
+                    return Err(Error::IouNeedsBoxes { side });
                 }
             }
         }

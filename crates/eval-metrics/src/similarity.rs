@@ -2,13 +2,13 @@
 //! similarity of points, both in [0, 1] so that every metric uses one threshold convention.
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{BoundingBox, Location, Vec2};
+use tracker_model::{BoundingBox, Location, Vec2, ensure_positive};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, Side};
 
 /// The similarity of a truth/estimate pair.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum Similarity {
     /// Intersection over union of boxes (MOTChallenge). Both locations must be boxes.
     Iou,
@@ -20,8 +20,10 @@ pub enum Similarity {
     },
 }
 
-/// Similarity plus the threshold at which a pair counts as a match.
+/// Similarity plus the threshold at which a pair counts as a match; checked by
+/// [`MatchConfig::check`] in every function that takes one.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MatchConfig {
     /// How pairs are compared.
     pub similarity: Similarity,
@@ -48,7 +50,7 @@ impl MatchConfig {
         }
     }
 
-    /// Checks the parameters once.
+    /// Checks the threshold (in (0, 1]) and the distance scale (finite, > 0).
     pub fn check(&self) -> Result<()> {
         if !(self.threshold > 0.0 && self.threshold <= 1.0) {
             return Err(Error::InvalidParameter {
@@ -56,13 +58,8 @@ impl MatchConfig {
                 reason: format!("{} is outside (0, 1]", self.threshold),
             });
         }
-        if let Similarity::Distance { zero_at } = self.similarity
-            && !(zero_at.is_finite() && zero_at > 0.0)
-        {
-            return Err(Error::InvalidParameter {
-                name: "distance scale",
-                reason: format!("{zero_at} must be finite and > 0"),
-            });
+        if let Similarity::Distance { zero_at } = self.similarity {
+            ensure_positive(zero_at, "distance scale")?;
         }
         Ok(())
     }
@@ -75,16 +72,17 @@ impl Similarity {
         let mut out = Vec::with_capacity(gt.len() * pred.len());
         match self {
             Similarity::Iou => {
-                let as_box = |l: &Location| {
-                    match l {
-                    Location::Box(b) => Ok(*b),
-                    Location::Point(_) => Err(Error::Incompatible(
-                        "IoU similarity needs boxes on both sides; use a distance similarity for points".into(),
-                    )),
-                }
+                let boxes = |locations: &[Location], side| {
+                    locations
+                        .iter()
+                        .map(|l| match l {
+                            Location::Box(b) => Ok(*b),
+                            Location::Point(_) => Err(Error::IouNeedsBoxes { side }),
+                        })
+                        .collect::<Result<Vec<BoundingBox>>>()
                 };
-                let g: Vec<BoundingBox> = gt.iter().map(as_box).collect::<Result<_>>()?;
-                let h: Vec<BoundingBox> = pred.iter().map(as_box).collect::<Result<_>>()?;
+                let g = boxes(gt, Side::Truth)?;
+                let h = boxes(pred, Side::Estimate)?;
                 for a in &g {
                     out.extend(h.iter().map(|b| a.iou(b)));
                 }
@@ -107,10 +105,12 @@ impl Similarity {
     pub fn between(&self, gt: &Location, pred: &Location) -> Result<f64> {
         match (self, gt, pred) {
             (Similarity::Iou, Location::Box(a), Location::Box(b)) => Ok(a.iou(b)),
-            (Similarity::Iou, _, _) => Err(Error::Incompatible(
-                "IoU similarity needs boxes on both sides; use a distance similarity for points"
-                    .into(),
-            )),
+            (Similarity::Iou, Location::Point(_), _) => {
+                Err(Error::IouNeedsBoxes { side: Side::Truth })
+            }
+            (Similarity::Iou, _, Location::Point(_)) => Err(Error::IouNeedsBoxes {
+                side: Side::Estimate,
+            }),
             (Similarity::Distance { zero_at }, a, b) => {
                 let d = (a.position() - b.position()).norm();
                 Ok((1.0 - d / zero_at).max(0.0))

@@ -10,7 +10,7 @@ use proptest::prelude::*;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tracker_model::{
-    BoundingBox, Measurement, Origin, Scan, Track, TrackId, TrackPoint, TrackSet, Vec2,
+    BoundingBox, Location, Measurement, Origin, Scan, Track, TrackId, TrackPoint, TrackSet, Vec2,
 };
 
 use crate::*;
@@ -616,7 +616,7 @@ fn ospa_over_time_covers_every_frame() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The seed papers' metrics
+// The reproduced papers' metrics (paper_metrics.rs)
 
 #[test]
 fn mae_and_mmae_by_hand() {
@@ -630,7 +630,14 @@ fn mae_and_mmae_by_hand() {
     let mm = mmae(&[m, m2]).unwrap();
     assert_relative_eq!(mm.x, 1.25);
     assert_relative_eq!(mm.euclidean, 2.0);
-    assert!(mae(&[p(0.0, 0.0)], &[]).is_err());
+    assert_eq!(
+        mae(&[p(0.0, 0.0)], &[]).unwrap_err(),
+        Error::LengthMismatch {
+            what: "MAE estimates (one per truth point)",
+            expected: 1,
+            got: 0
+        }
+    );
     assert!(mae(&[], &[]).is_err());
     assert!(mmae(&[]).is_err());
 }
@@ -666,7 +673,7 @@ fn success_rate_and_faf_by_hand() {
             &points(&[]),
             &MatchConfig::iou(0.5)
         ),
-        Err(Error::Incompatible(_))
+        Err(Error::IouNeedsBoxes { side: Side::Truth })
     ));
 }
 
@@ -734,7 +741,23 @@ fn association_scores_by_hand() {
     assert_relative_eq!(s.precision, 0.5);
     assert_relative_eq!(s.recall, 1.0 / 3.0);
     assert_relative_eq!(s.f1, 0.4);
-    assert!(association_scores(&scans, &labels[..2]).is_err());
+    assert_eq!(
+        association_scores(&scans, &labels[..2]).unwrap_err(),
+        Error::LengthMismatch {
+            what: "label lists (one per scan)",
+            expected: 3,
+            got: 2
+        }
+    );
+    let short = vec![labels[0].clone(), labels[1].clone(), vec![Some(7)]];
+    assert_eq!(
+        association_scores(&scans, &short).unwrap_err(),
+        Error::ScanLabelsMismatch {
+            scan: 2,
+            n_measurements: 2,
+            n_labels: 1
+        }
+    );
 }
 
 #[test]
@@ -751,6 +774,54 @@ fn bad_configurations_are_errors() {
         matching: MatchConfig::iou(0.0),
     };
     assert!(evaluate(&gt, &gt, &bad).is_err());
+    assert!(bad.check().is_err());
+    assert!(EvalConfig::default().check().is_ok());
+    // A bad OSPA configuration is refused even when there is nothing to score.
+    let bad_ospa = OspaConfig {
+        cutoff: 10.0,
+        order: 0.5,
+    };
+    let empty = TrackSet::new();
+    assert!(ospa_over_time(&empty, &empty, &bad_ospa).is_err());
+    assert!(gospa_over_time(&empty, &empty, &bad_ospa).is_err());
+    // IoU names the side that holds a point.
+    let (b, pt) = (
+        Location::Box(BoundingBox::new(0.0, 0.0, 1.0, 1.0).unwrap()),
+        Location::Point(p(0.0, 0.0)),
+    );
+    assert_eq!(
+        Similarity::Iou.between(&b, &pt).unwrap_err(),
+        Error::IouNeedsBoxes {
+            side: Side::Estimate
+        }
+    );
+    assert_eq!(
+        Similarity::Iou.matrix(&[pt], &[b]).unwrap_err(),
+        Error::IouNeedsBoxes { side: Side::Truth }
+    );
+}
+
+#[test]
+fn configs_reject_unknown_fields() {
+    let config: EvalConfig =
+        serde_json::from_str(r#"{"matching": {"similarity": "iou", "threshold": 0.5}}"#).unwrap();
+    assert_eq!(config, EvalConfig::default());
+    assert_eq!(
+        serde_json::from_str::<EvalConfig>("{}").unwrap(),
+        EvalConfig::default()
+    );
+    for bad in [
+        r#"{"matching": {"similarity": "iou", "threshold": 0.5}, "iou": 0.5}"#,
+        r#"{"matching": {"similarity": "iou", "threshold": 0.5, "thresh": 0.5}}"#,
+        r#"{"matching": {"similarity": {"distance": {"zero_at": 2.0, "zero": 1.0}}, "threshold": 0.5}}"#,
+    ] {
+        assert!(serde_json::from_str::<EvalConfig>(bad).is_err(), "{bad}");
+    }
+    assert!(serde_json::from_str::<OspaConfig>(r#"{"cutoff": 1.0, "order": 2.0}"#).is_ok());
+    assert!(
+        serde_json::from_str::<OspaConfig>(r#"{"cutoff": 1.0, "order": 2.0, "alpha": 2.0}"#)
+            .is_err()
+    );
 }
 
 // ---------------------------------------------------------------------------------------------

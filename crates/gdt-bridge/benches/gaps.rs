@@ -22,17 +22,21 @@ fn segments(k: usize) -> (Vec<Observation>, Vec<Observation>) {
 fn bench_gaps(c: &mut Criterion) {
     let gaps: Vec<_> = (0..1000).map(segments).collect();
     assert_eq!(
-        recover_gdt(&gaps[0].0, &gaps[0].1, &GdtConfig::default())
-            .unwrap()
-            .frames
-            .len(),
+        recover_gdt(
+            &gaps[0].0,
+            &gaps[0].1,
+            &GdtConfig::default().check().unwrap()
+        )
+        .unwrap()
+        .frames
+        .len(),
         21
     );
-    let cfg = GdtConfig::default();
+    let model = GdtConfig::default().check().unwrap();
     c.bench_function("gdt_1000_gaps_of_20_steps", |b| {
         b.iter(|| {
             gaps.iter()
-                .map(|(a, z)| recover_gdt(black_box(a), black_box(z), &cfg).unwrap())
+                .map(|(a, z)| recover_gdt(black_box(a), black_box(z), &model).unwrap())
                 .collect::<Vec<_>>()
         })
     });

@@ -1,32 +1,44 @@
-//! The baselines GDT is compared with (seed 003, Table 1): linear interpolation, the natural
+//! The baselines GDT is compared with (Oh & Jung 2015, Table 1): linear interpolation, the natural
 //! cubic spline through the observed samples (SciPy's `CubicSpline(bc_type='natural')`), and a
 //! weighted least-squares cubic B-spline with clamped knots (SciPy's `make_lsq_spline`).
 //! Each works on one coordinate: samples (t_i, p_i) with strictly increasing t_i.
 
 use nalgebra::{DMatrix, DVector};
 use serde::{Deserialize, Serialize};
+use tracker_model::ensure_positive;
 
 use crate::error::{Error, Result};
 
-fn check_samples(times: &[f64], values: &[f64], min: usize) -> Result<()> {
+/// Checks the samples of a method (`what`) that needs at least `min` of them.
+fn check_samples(times: &[f64], values: &[f64], min: usize, what: &'static str) -> Result<()> {
     if times.len() != values.len() {
-        return Err(Error::Invalid(format!(
-            "{} times but {} values",
-            times.len(),
-            values.len()
-        )));
+        return Err(Error::LengthMismatch {
+            what: "values",
+            n_times: times.len(),
+            len: values.len(),
+        });
     }
     if times.len() < min {
-        return Err(Error::Invalid(format!(
-            "need at least {min} samples, got {}",
-            times.len()
-        )));
+        return Err(Error::TooFewSamples {
+            what,
+            len: times.len(),
+            min,
+        });
     }
-    if times.iter().chain(values).any(|v| !v.is_finite()) {
-        return Err(Error::Invalid("samples must be finite".into()));
+    if let Some(index) =
+        (0..times.len()).find(|&i| !(times[i].is_finite() && values[i].is_finite()))
+    {
+        return Err(Error::NonFiniteSample {
+            index,
+            time: times[index],
+            value: values[index],
+        });
     }
-    if times.windows(2).any(|w| w[1] <= w[0]) {
-        return Err(Error::Invalid("sample times must strictly increase".into()));
+    if let Some(w) = times.windows(2).find(|w| w[1] <= w[0]) {
+        return Err(Error::TimesOutOfOrder {
+            time: w[1],
+            last: w[0],
+        });
     }
     Ok(())
 }
@@ -42,7 +54,7 @@ fn interval(times: &[f64], x: f64) -> usize {
 
 /// Piecewise-linear interpolation of the samples at `at`.
 pub fn linear(times: &[f64], values: &[f64], at: &[f64]) -> Result<Vec<f64>> {
-    check_samples(times, values, 2)?;
+    check_samples(times, values, 2, "a linear interpolation")?;
     Ok(at
         .iter()
         .map(|&x| {
@@ -58,7 +70,7 @@ pub fn linear(times: &[f64], values: &[f64], at: &[f64]) -> Result<Vec<f64>> {
 /// h_{i−1} M_{i−1} + 2(h_{i−1} + h_i) M_i + h_i M_{i+1} = 6 (Δ_i − Δ_{i−1}) by the Thomas
 /// algorithm (the system is strictly diagonally dominant, so no pivoting is needed).
 pub fn natural_cubic_spline(times: &[f64], values: &[f64], at: &[f64]) -> Result<Vec<f64>> {
-    check_samples(times, values, 2)?;
+    check_samples(times, values, 2, "a natural cubic spline")?;
     let n = times.len();
     let h: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
     let slope: Vec<f64> = (0..n - 1)
@@ -94,8 +106,10 @@ pub fn natural_cubic_spline(times: &[f64], values: &[f64], at: &[f64]) -> Result
         .collect())
 }
 
-/// Settings of the least-squares B-spline baseline.
+/// Settings of the least-squares B-spline baseline. Every value is valid: there is nothing
+/// to check (whether the samples determine the spline is checked when fitting).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct BSplineConfig {
     /// Interior knots per side of the gap, spread uniformly over each side's samples (none is
     /// placed inside the gap, so every knot span has data: Schoenberg-Whitney).
@@ -156,11 +170,16 @@ pub fn lsq_bspline(
     config: &BSplineConfig,
     at: &[f64],
 ) -> Result<Vec<f64>> {
-    check_samples(times, values, 4)?;
-    if weights.len() != times.len() || weights.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
-        return Err(Error::Invalid(
-            "need one finite positive weight per sample".into(),
-        ));
+    check_samples(times, values, 4, "a cubic B-spline")?;
+    if weights.len() != times.len() {
+        return Err(Error::LengthMismatch {
+            what: "weights",
+            n_times: times.len(),
+            len: weights.len(),
+        });
+    }
+    for w in weights {
+        ensure_positive(*w, "weights")?;
     }
     let (t0, t1) = (times[0], times[times.len() - 1]);
     let before: Vec<f64> = times.iter().copied().filter(|&t| t <= gap.0).collect();
@@ -183,10 +202,11 @@ pub fn lsq_bspline(
     knots[4..n_knots - 4].sort_by(f64::total_cmp);
     let n_basis = knots.len() - 4;
     if times.len() < n_basis {
-        return Err(Error::Invalid(format!(
-            "{} samples cannot determine {n_basis} B-spline coefficients",
-            times.len()
-        )));
+        return Err(Error::TooFewSamples {
+            what: "the B-spline's coefficients",
+            len: times.len(),
+            min: n_basis,
+        });
     }
     let design = DMatrix::from_fn(times.len(), n_basis, |r, c| {
         weights[r] * basis(&knots, times[r])[c]
@@ -195,9 +215,10 @@ pub fn lsq_bspline(
     // Least squares by QR of the weighted design matrix: R c = Qᵀ b.
     let qr = design.qr();
     let qtb = qr.q().transpose() * rhs;
-    let coeffs = qr.r().solve_upper_triangular(&qtb).ok_or_else(|| {
-        Error::Invalid("B-spline design matrix is rank deficient (knots without data)".into())
-    })?;
+    let coeffs = qr
+        .r()
+        .solve_upper_triangular(&qtb)
+        .ok_or(Error::RankDeficientFit)?;
     Ok(at
         .iter()
         .map(|&x| {

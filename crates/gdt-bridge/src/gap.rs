@@ -3,7 +3,10 @@
 
 use nalgebra::{Matrix2, Matrix2x4, Matrix4, Vector2, Vector4};
 use serde::{Deserialize, Serialize};
-use tracker_model::{ConstantVelocity2, CvNoise, Frame, TransitionModel, Vec2};
+use tracker_model::{
+    ConstantVelocity2, CvNoise, Frame, Gaussian, PositionMeasurement2, TransitionModel, Vec2,
+    ensure_non_negative, ensure_positive, position_measurement,
+};
 
 use crate::baselines::{BSplineConfig, linear, lsq_bspline, natural_cubic_spline};
 use crate::error::{Error, Result};
@@ -19,8 +22,10 @@ pub struct Observation {
     pub position: Vec2,
 }
 
-/// The motion and noise model GDT recovers with.
+/// The motion and noise model GDT recovers with; [`GdtConfig::check`] turns it into the
+/// [`GdtModel`] every recovery and linking function takes.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct GdtConfig {
     /// White-acceleration spectral density per frame (pixels² / frame³).
     pub accel_psd: f64,
@@ -31,11 +36,56 @@ pub struct GdtConfig {
 }
 
 impl GdtConfig {
-    /// The constant-velocity model (one frame per step) these settings describe.
-    pub fn motion(&self) -> Result<ConstantVelocity2> {
-        Ok(ConstantVelocity2::new(
-            1.0,
-            CvNoise::WhiteAcceleration { q: self.accel_psd },
+    /// Checks every field and builds the models the settings describe: constant velocity
+    /// with one frame per step, and a position measurement.
+    pub fn check(&self) -> Result<GdtModel> {
+        ensure_non_negative(self.accel_psd, "accel_psd")?;
+        ensure_positive(self.measurement_variance, "measurement_variance")?;
+        ensure_positive(self.initial_velocity_variance, "initial_velocity_variance")?;
+        Ok(GdtModel {
+            config: *self,
+            motion: ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: self.accel_psd })?,
+            sensor: position_measurement(self.measurement_variance)?,
+        })
+    }
+}
+
+/// A checked [`GdtConfig`] with the models it describes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GdtModel {
+    config: GdtConfig,
+    motion: ConstantVelocity2,
+    sensor: PositionMeasurement2,
+}
+
+impl GdtModel {
+    /// The settings it was built from.
+    pub fn config(&self) -> &GdtConfig {
+        &self.config
+    }
+
+    /// Constant velocity, one frame per step.
+    pub fn motion(&self) -> &ConstantVelocity2 {
+        &self.motion
+    }
+
+    /// The position measurement (variance `measurement_variance` per axis).
+    pub fn sensor(&self) -> &PositionMeasurement2 {
+        &self.sensor
+    }
+
+    /// The prior of a segment's first state: its first position with the measurement
+    /// variance, zero velocity with `initial_velocity_variance`.
+    pub(crate) fn prior(&self, first: Vec2) -> Result<Gaussian<4>> {
+        let cfg = &self.config;
+        Ok(Gaussian::new(
+            Vector4::new(first.x, first.y, 0.0, 0.0),
+            Matrix4::from_diagonal(&Vector4::new(
+                cfg.measurement_variance,
+                cfg.measurement_variance,
+                cfg.initial_velocity_variance,
+                cfg.initial_velocity_variance,
+            )),
         )?)
     }
 }
@@ -61,63 +111,86 @@ pub struct RecoveredGap {
     pub covariances: Vec<Matrix2<f64>>,
 }
 
+/// Checks that a segment's frames strictly increase.
+pub(crate) fn check_frames(segment: &[Observation]) -> Result<()> {
+    match segment.windows(2).find(|w| w[1].frame <= w[0].frame) {
+        Some(w) => Err(Error::FramesOutOfOrder {
+            frame: w[1].frame,
+            last: w[0].frame,
+        }),
+        None => Ok(()),
+    }
+}
+
+/// Checks that a segment's frames strictly increase and its positions are finite.
+fn check_segment(segment: &[Observation]) -> Result<()> {
+    check_frames(segment)?;
+    match segment
+        .iter()
+        .find(|o| !(o.position.x.is_finite() && o.position.y.is_finite()))
+    {
+        Some(o) => Err(Error::NonFiniteObservation { frame: o.frame }),
+        None => Ok(()),
+    }
+}
+
 /// Checks the two segments and returns the missing frames between them.
 fn missing_frames(a: &[Observation], b: &[Observation]) -> Result<Vec<Frame>> {
     let (Some(last_a), Some(first_b)) = (a.last(), b.first()) else {
-        return Err(Error::Invalid(
-            "both segments need at least one observation".into(),
-        ));
+        return Err(Error::SegmentTooShort { len: 0, min: 1 });
     };
     for seg in [a, b] {
-        if seg.windows(2).any(|w| w[1].frame <= w[0].frame) {
-            return Err(Error::Invalid(
-                "segment frames must strictly increase".into(),
-            ));
-        }
-        if seg
-            .iter()
-            .any(|o| !(o.position.x.is_finite() && o.position.y.is_finite()))
-        {
-            return Err(Error::Invalid("segment positions must be finite".into()));
-        }
+        check_segment(seg)?;
     }
     if first_b.frame <= last_a.frame + 1 {
-        return Err(Error::Invalid(format!(
-            "segment B starts at frame {}, so nothing is missing after frame {}",
-            first_b.frame, last_a.frame
-        )));
+        return Err(Error::NoGap {
+            last_a: last_a.frame,
+            first_b: first_b.frame,
+        });
     }
     Ok((last_a.frame + 1..first_b.frame).collect())
 }
 
 /// Recovers the gap with the goal-directed model: a Kalman filter over segment A (prior: its
 /// first position with the measurement variance, zero velocity with
-/// `initial_velocity_variance`) gives the state at A's last frame; the goal is B's first observation, T frames later; the conditioned
-/// model's forward prediction gives the position and its covariance at every missing frame.
-pub fn recover_gdt(a: &[Observation], b: &[Observation], cfg: &GdtConfig) -> Result<RecoveredGap> {
-    let first_b = b
-        .first()
-        .ok_or_else(|| Error::Invalid("segment B is empty".into()))?;
+/// `initial_velocity_variance`) gives the state at A's last frame; the goal is B's first
+/// observation, T frames later; the conditioned model's forward prediction gives the position
+/// and its covariance at every missing frame.
+///
+/// ```
+/// use gdt_bridge::{GdtConfig, Observation, recover_gdt};
+/// use tracker_model::Vec2;
+///
+/// let seen = |frame: u32| Observation { frame, position: Vec2::new(f64::from(frame), 5.0) };
+/// let (a, b): (Vec<_>, Vec<_>) = ((0..5).map(seen).collect(), (8..12).map(seen).collect());
+/// let gap = recover_gdt(&a, &b, &GdtConfig::default().check()?)?;
+/// assert_eq!(gap.frames, [5, 6, 7]);
+/// # Ok::<(), gdt_bridge::Error>(())
+/// ```
+pub fn recover_gdt(a: &[Observation], b: &[Observation], model: &GdtModel) -> Result<RecoveredGap> {
+    let first_b = b.first().ok_or(Error::SegmentTooShort { len: 0, min: 1 })?;
     let goal = Goal {
         observation: Matrix2x4::identity(),
         value: first_b.position,
-        covariance: Matrix2::identity() * cfg.measurement_variance,
+        covariance: Matrix2::identity() * model.config.measurement_variance,
     };
-    recover_with_goal(a, b, cfg, &goal)
+    recover_with_goal(a, b, model, &goal)
 }
 
-/// Beyond the seed: the goal is B's full state (position and velocity) at its first frame,
+/// Beyond Oh & Jung (2015): the goal is B's full state (position and velocity) at its first frame,
 /// estimated by a Kalman filter run backwards in time over all of B, so the recovery also
 /// knows the direction in which the object leaves the gap.
 pub fn recover_gdt_goal_state(
     a: &[Observation],
     b: &[Observation],
-    cfg: &GdtConfig,
+    model: &GdtModel,
 ) -> Result<RecoveredGap> {
     let last_b = b
         .last()
-        .ok_or_else(|| Error::Invalid("segment B is empty".into()))?
+        .ok_or(Error::SegmentTooShort { len: 0, min: 1 })?
         .frame;
+    // B's frames must increase before they are reversed below.
+    check_frames(b)?;
     // Time reversal: frame f becomes last_b − f, and the velocity changes sign.
     let reversed: Vec<Observation> = b
         .iter()
@@ -127,14 +200,14 @@ pub fn recover_gdt_goal_state(
             position: o.position,
         })
         .collect();
-    let backward = end_state(&reversed, cfg)?;
+    let backward = end_state(&reversed, model)?;
     let flip = Matrix4::from_diagonal(&Vector4::new(1.0, 1.0, -1.0, -1.0));
     let goal = Goal {
         observation: Matrix4::identity(),
         value: flip * backward.mean(),
         covariance: flip * backward.covariance() * flip,
     };
-    recover_with_goal(a, b, cfg, &goal)
+    recover_with_goal(a, b, model, &goal)
 }
 
 /// Filters A, conditions the constant-velocity model on `goal` at B's first frame and predicts
@@ -142,15 +215,14 @@ pub fn recover_gdt_goal_state(
 fn recover_with_goal<const M: usize>(
     a: &[Observation],
     b: &[Observation],
-    cfg: &GdtConfig,
+    model: &GdtModel,
     goal: &Goal<4, M>,
 ) -> Result<RecoveredGap> {
     let frames = missing_frames(a, b)?;
-    let motion = cfg.motion()?;
-    let start = end_state(a, cfg)?;
+    let start = end_state(a, model)?;
     let horizon = frames.len() + 1;
-    let f = motion.transition_matrix(1);
-    let q = motion.process_noise(1);
+    let f = model.motion.transition_matrix(1);
+    let q = model.motion.process_noise(1);
     let model = GoalDirected::new(&vec![f; horizon], &vec![q; horizon], goal, &start)?;
     let moments = model.predict();
     let hidden = &moments[1..horizon];
@@ -169,7 +241,7 @@ fn recover_with_goal<const M: usize>(
 
 /// The interpolation baselines.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum Baseline {
     /// A straight line from A's last to B's first observation.
     Linear,

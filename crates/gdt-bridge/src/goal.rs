@@ -105,7 +105,7 @@ impl<const N: usize> GoalDirected<N> {
         Ok(Self { initial, steps })
     }
 
-    /// The seed's special forms (seed 003 eqs. 11-15 for an invertible H, 16-18 with the
+    /// The special forms of Oh & Jung (2015) (eqs. 11-15 for an invertible H, 16-18 with the
     /// pseudo-inverse H⁺ = (HᵀH)⁻¹Hᵀ when only HᵀH is invertible): the goal becomes a target on
     /// the state, μ = H⁺ y_T with covariance H⁺ Π H⁺ᵀ, and with the backward transitions
     /// φ(t, T) = Φ(T, t)⁻¹ (every A_t must be invertible),
@@ -115,8 +115,8 @@ impl<const N: usize> GoalDirected<N> {
     ///
     /// With an invertible H this is exactly [`GoalDirected::new`]; with the pseudo-inverse it is
     /// exact only when Π is a multiple of the identity (ordinary least squares is then the
-    /// generalised one); otherwise it is the seed's approximation.
-    pub fn seed_form<const M: usize>(
+    /// generalised one); otherwise it is Oh & Jung's approximation.
+    pub fn pseudo_inverse_form<const M: usize>(
         transitions: &[SMatrix<f64, N, N>],
         process_noise: &[SMatrix<f64, N, N>],
         goal: &Goal<N, M>,
@@ -125,20 +125,18 @@ impl<const N: usize> GoalDirected<N> {
         check_model(transitions, process_noise, goal)?;
         let horizon = transitions.len();
         let h = &goal.observation;
-        let hth_inv = (h.transpose() * h).try_inverse().ok_or_else(|| {
-            Error::Invalid("HᵀH is singular: the goal does not determine the state".into())
-        })?;
+        let hth_inv = (h.transpose() * h)
+            .try_inverse()
+            .ok_or(Error::GoalUnderdetermined)?;
         let h_pinv = hth_inv * h.transpose();
         let target = h_pinv * goal.value;
         let target_cov = symmetric(&(h_pinv * goal.covariance * h_pinv.transpose()));
         let (phi, acc) = propagators(transitions, process_noise);
         // Π(t, T) and φ(t, T); P_0 of the sum is P_1 (no noise enters before step 1).
         let backward = |t: usize| -> Result<(CholeskyFactor<N>, SMatrix<f64, N, N>)> {
-            let back = phi[t].try_inverse().ok_or_else(|| {
-                Error::Invalid(format!(
-                    "Φ(T, {t}) is singular: the seed form needs invertible transitions"
-                ))
-            })?;
+            let back = phi[t]
+                .try_inverse()
+                .ok_or(Error::SingularTransition { step: t })?;
             let p = acc[t.max(1)];
             let pi = symmetric(&(back * (target_cov + p) * back.transpose()));
             Ok((CholeskyFactor::new(&pi, "Π(t, T)")?, back))
@@ -202,11 +200,10 @@ fn check_model<const N: usize, const M: usize>(
 ) -> Result<()> {
     let horizon = transitions.len();
     if horizon == 0 || process_noise.len() != horizon {
-        return Err(Error::Invalid(format!(
-            "need T ≥ 1 transitions and as many process-noise matrices (got {} and {})",
-            horizon,
-            process_noise.len()
-        )));
+        return Err(Error::HorizonMismatch {
+            transitions: horizon,
+            process_noise: process_noise.len(),
+        });
     }
     for (t, (a, q)) in transitions.iter().zip(process_noise).enumerate() {
         // A time-invariant model repeats the same matrices; check each distinct one once.
@@ -214,8 +211,10 @@ fn check_model<const N: usize, const M: usize>(
             continue;
         }
         check_finite_matrix(a, "transition matrix")?;
-        check_positive_semidefinite(q, "process noise")
-            .map_err(|e| Error::Invalid(format!("step {}: {e}", t + 1)))?;
+        check_positive_semidefinite(q, "process noise").map_err(|source| Error::ProcessNoise {
+            step: t + 1,
+            source,
+        })?;
     }
     check_finite_matrix(&goal.observation, "goal observation matrix")?;
     check_finite_matrix(&goal.value, "goal value")?;

@@ -1,9 +1,10 @@
 //! # gdt-bridge
 //!
-//! Recovers the missing trajectory between two disconnected track segments (seed 003): the
-//! goal-directed state equation of Srinivasan, Eden, Willsky & Brown (2006) conditions a linear
-//! Gauss-Markov motion model on reaching a noisy goal (the next segment's first observation) at
-//! a known time, and its forward prediction fills the gap with positions and covariances.
+//! Recovers the missing trajectory between two disconnected track segments (Oh & Jung 2015):
+//! the goal-directed state equation of Srinivasan, Eden, Willsky & Brown (2006) conditions a
+//! linear Gauss-Markov motion model on reaching a noisy goal (the next segment's first
+//! observation) at a known time, and its forward prediction fills the gap with positions and
+//! covariances.
 //!
 //! * [`GoalDirected`]: the general form (time-varying A_t, Q_t, goal y_T = H x_T + v), giving
 //!   each step's transition, drift offset and reduced noise, and the conditional initial state;
@@ -12,18 +13,40 @@
 //! * baselines [`linear`], [`natural_cubic_spline`], [`lsq_bspline`] and [`recover_baseline`];
 //! * segment linking ([`link_segments`]): gated goal-directed likelihood costs and an optimal
 //!   one-to-one assignment;
-//! * the seed's evaluation protocol: [`gaps_from_mask`] turns masked crossings into gaps.
+//! * Oh & Jung's evaluation protocol: [`gaps_from_mask`] turns masked crossings into gaps.
 //!
-//! The seed's special forms (eqs. 11-18: invertible H, pseudo-inverse) are
-//! [`GoalDirected::seed_form`]; tests show where they equal the general form.
+//! Oh & Jung's special forms (their eqs. 11-18: invertible H, pseudo-inverse) are
+//! [`GoalDirected::pseudo_inverse_form`]; tests show where they equal the general form.
+//!
+//! Settings are checked once: [`GdtConfig::check`] gives the [`GdtModel`] the recovery
+//! functions take, [`LinkConfig::check`] the [`LinkModel`] of linking.
+//!
+//! A walker seen at frames 0-5 and 12-17, hidden in between:
 //!
 //! ```
 //! use gdt_bridge::{GdtConfig, Observation, recover_gdt};
 //! use tracker_model::Vec2;
-//! let seg = |f0: u32, n: u32| (f0..f0 + n).map(|f| Observation { frame: f, position: Vec2::new(2.0 * f as f64, 1.0) }).collect::<Vec<_>>();
-//! let gap = recover_gdt(&seg(0, 10), &seg(20, 10), &GdtConfig::default()).unwrap();
-//! assert_eq!(gap.frames, (10..20).collect::<Vec<_>>());
-//! assert!((gap.positions[5].x - 30.0).abs() < 1.0);
+//!
+//! // (frame, x, y) in pixels.
+//! let before = [(0, 10.0, 50.0), (1, 13.1, 50.9), (2, 15.9, 52.1), (3, 19.0, 53.0),
+//!               (4, 22.1, 53.9), (5, 24.9, 55.0)];
+//! let after = [(12, 46.0, 62.1), (13, 49.1, 62.9), (14, 52.0, 64.0), (15, 54.9, 65.1),
+//!              (16, 58.0, 66.0), (17, 61.1, 66.9)];
+//! let observations = |points: &[(u32, f64, f64)]| -> Vec<Observation> {
+//!     points
+//!         .iter()
+//!         .map(|&(frame, x, y)| Observation { frame, position: Vec2::new(x, y) })
+//!         .collect()
+//! };
+//! let model = GdtConfig::default().check()?;
+//! let gap = recover_gdt(&observations(&before), &observations(&after), &model)?;
+//! assert_eq!(gap.frames, (6..12).collect::<Vec<_>>());
+//! // The walker moves about (3, 1) pixels per frame: at frame 9 it is near (37, 58).
+//! let at_9 = gap.positions[3];
+//! assert!((at_9 - Vec2::new(37.0, 58.0)).norm() < 1.5, "{at_9:?}");
+//! // Each recovered position comes with its covariance.
+//! assert_eq!(gap.covariances.len(), gap.frames.len());
+//! # Ok::<(), gdt_bridge::Error>(())
 //! ```
 
 mod baselines;
@@ -39,9 +62,9 @@ mod tests;
 pub use baselines::{BSplineConfig, linear, lsq_bspline, natural_cubic_spline};
 pub use error::{Error, Result};
 pub use gap::{
-    Baseline, GdtConfig, Observation, RecoveredGap, recover_baseline, recover_gdt,
+    Baseline, GdtConfig, GdtModel, Observation, RecoveredGap, recover_baseline, recover_gdt,
     recover_gdt_goal_state,
 };
 pub use goal::{Goal, GoalDirected, GoalStep, Moments};
-pub use link::{Link, LinkConfig, link_costs, link_segments};
+pub use link::{Link, LinkConfig, LinkModel, link_costs, link_segments};
 pub use protocol::{GapCase, gaps_from_mask};

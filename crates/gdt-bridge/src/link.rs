@@ -1,5 +1,5 @@
-//! Segment linking: which track segments continue which. The seed's pipeline associates
-//! segments before recovering the gaps between them.
+//! Segment linking: which track segments continue which. Oh & Jung (2015) associate segments
+//! before recovering the gaps between them.
 //!
 //! The cost of continuing segment A with segment B is the negative log-likelihood of B's first
 //! observation under A's filtered end state propagated over the gap: the normalising constant
@@ -7,15 +7,16 @@
 //! by the largest gap and the largest speed, and the optimal one-to-one assignment (the `lsap`
 //! crate) keeps the pairs whose cost beats starting a new track.
 
-use nalgebra::Vector4;
 use serde::{Deserialize, Serialize};
-use tracker_model::{Gaussian, ObservationModel, TransitionModel, filter, position_measurement};
+use tracker_model::{Gaussian, ObservationModel, TransitionModel, ensure_positive, filter};
 
 use crate::error::{Error, Result};
-use crate::gap::{GdtConfig, Observation};
+use crate::gap::{GdtConfig, GdtModel, Observation, check_frames};
 
-/// Linking settings.
+/// Linking settings; [`LinkConfig::check`] turns them into the [`LinkModel`] that
+/// [`link_costs`] and [`link_segments`] take.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LinkConfig {
     /// Motion and noise model of the segments.
     pub model: GdtConfig,
@@ -26,6 +27,49 @@ pub struct LinkConfig {
     /// A link must cost less than this (a negative log-likelihood); otherwise B starts a new
     /// track.
     pub new_track_cost: f64,
+}
+
+impl LinkConfig {
+    /// Checks every field and builds the segments' model.
+    pub fn check(&self) -> Result<LinkModel> {
+        let model = self.model.check()?;
+        if self.max_gap_frames == 0 {
+            return Err(Error::InvalidParameter {
+                name: "max_gap_frames",
+                reason: "0: no segment could continue another".into(),
+            });
+        }
+        ensure_positive(self.max_speed, "max_speed")?;
+        if !self.new_track_cost.is_finite() {
+            return Err(Error::InvalidParameter {
+                name: "new_track_cost",
+                reason: format!("{} must be finite", self.new_track_cost),
+            });
+        }
+        Ok(LinkModel {
+            config: *self,
+            model,
+        })
+    }
+}
+
+/// A checked [`LinkConfig`] with the segments' model.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinkModel {
+    config: LinkConfig,
+    model: GdtModel,
+}
+
+impl LinkModel {
+    /// The settings it was built from.
+    pub fn config(&self) -> &LinkConfig {
+        &self.config
+    }
+
+    /// The segments' motion and noise model.
+    pub fn model(&self) -> &GdtModel {
+        &self.model
+    }
 }
 
 /// A chosen link: segment `from` continues as segment `to`.
@@ -40,59 +84,44 @@ pub struct Link {
 }
 
 /// Filters a segment and returns its state at its last frame.
-pub(crate) fn end_state(segment: &[Observation], cfg: &GdtConfig) -> Result<Gaussian<4>> {
+pub(crate) fn end_state(segment: &[Observation], model: &GdtModel) -> Result<Gaussian<4>> {
     // Two observations are the least that determine a velocity.
-    if segment.len() < 2 {
-        return Err(Error::Invalid(format!(
-            "a segment needs at least 2 observations to estimate its velocity, got {}",
-            segment.len()
-        )));
-    }
-    let first = segment[0];
-    let last = segment[segment.len() - 1];
-    if segment.windows(2).any(|w| w[1].frame <= w[0].frame) {
-        return Err(Error::Invalid(
-            "segment frames must strictly increase".into(),
-        ));
-    }
-    let motion = cfg.motion()?;
-    let sensor = position_measurement(cfg.measurement_variance)?;
-    let prior = Gaussian::new(
-        Vector4::new(first.position.x, first.position.y, 0.0, 0.0),
-        nalgebra::Matrix4::from_diagonal(&Vector4::new(
-            cfg.measurement_variance,
-            cfg.measurement_variance,
-            cfg.initial_velocity_variance,
-            cfg.initial_velocity_variance,
-        )),
-    )?;
+    let (first, last) = match segment {
+        [first, .., last] => (*first, *last),
+        _ => {
+            return Err(Error::SegmentTooShort {
+                len: segment.len(),
+                min: 2,
+            });
+        }
+    };
+    check_frames(segment)?;
+    let prior = model.prior(first.position)?;
     let mut zs = vec![None; (last.frame - first.frame + 1) as usize];
     for o in segment {
         zs[(o.frame - first.frame) as usize] = Some(o.position);
     }
-    let run = filter(&motion, &sensor, &prior, &zs)?;
-    run.steps
-        .last()
-        .map(|s| s.filtered.clone())
-        .ok_or_else(|| Error::Invalid("empty segment".into()))
+    let mut run = filter(model.motion(), model.sensor(), &prior, &zs)?;
+    let end = run
+        .steps
+        .pop()
+        .expect("the filter makes one step per frame, and a segment spans at least two");
+    Ok(end.filtered)
 }
 
 /// The cost of every gated (A, B) pair, as (from, to, cost).
 pub fn link_costs(
     segments: &[Vec<Observation>],
-    cfg: &LinkConfig,
+    linking: &LinkModel,
 ) -> Result<Vec<(usize, usize, f64)>> {
-    if !(cfg.max_speed.is_finite() && cfg.max_speed > 0.0) {
-        return Err(Error::Invalid(format!(
-            "max_speed {} must be finite and > 0",
-            cfg.max_speed
-        )));
-    }
-    let motion = cfg.model.motion()?;
-    let sensor = position_measurement(cfg.model.measurement_variance)?;
+    let (cfg, motion, sensor) = (
+        &linking.config,
+        linking.model.motion(),
+        linking.model.sensor(),
+    );
     let ends = segments
         .iter()
-        .map(|s| end_state(s, &cfg.model))
+        .map(|s| end_state(s, &linking.model))
         .collect::<Result<Vec<_>>>()?;
     let mut out = Vec::new();
     for (i, a) in segments.iter().enumerate() {
@@ -120,12 +149,13 @@ pub fn link_costs(
 /// The optimal set of links: each segment continues at most one earlier segment and is
 /// continued by at most one later one, minimising the total cost of the chosen links minus
 /// `new_track_cost` for each (so a link is worth taking only when it costs less than that).
-pub fn link_segments(segments: &[Vec<Observation>], cfg: &LinkConfig) -> Result<Vec<Link>> {
+pub fn link_segments(segments: &[Vec<Observation>], linking: &LinkModel) -> Result<Vec<Link>> {
     let n = segments.len();
     if n == 0 {
         return Ok(Vec::new());
     }
-    let costs = link_costs(segments, cfg)?;
+    let costs = link_costs(segments, linking)?;
+    let cfg = &linking.config;
     // Maximum-weight matching with weight max(0, new_track_cost − cost): pairs that do not beat
     // a new track weigh 0 and are dropped after the assignment.
     let mut weights = vec![0.0; n * n];

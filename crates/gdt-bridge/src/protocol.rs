@@ -1,4 +1,4 @@
-//! The seed's evaluation protocol (seed 003 §4): a mask hides part of the scene; every true
+//! The evaluation protocol of Oh & Jung (2015, §4): a mask hides part of the scene; every true
 //! trajectory that crosses the mask becomes a gap whose hidden positions are to be recovered
 //! from the observations before and after it.
 

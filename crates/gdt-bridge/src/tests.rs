@@ -208,7 +208,7 @@ fn gaps_on_a_straight_path_are_recovered_by_every_method() {
     };
     let a: Vec<Observation> = (0..15).map(obs).collect();
     let b: Vec<Observation> = (25..40).map(obs).collect();
-    let gdt = recover_gdt(&a, &b, &GdtConfig::default()).unwrap();
+    let gdt = recover_gdt(&a, &b, &default_model()).unwrap();
     assert_eq!(gdt.frames, (15..25).collect::<Vec<_>>());
     for (f, p) in gdt.frames.iter().zip(&gdt.positions) {
         assert!(
@@ -261,8 +261,8 @@ fn gaps_on_a_straight_path_are_recovered_by_every_method() {
             );
         }
     }
-    assert!(recover_gdt(&b, &a, &GdtConfig::default()).is_err());
-    assert!(recover_gdt(&a, &[], &GdtConfig::default()).is_err());
+    assert!(recover_gdt(&b, &a, &default_model()).is_err());
+    assert!(recover_gdt(&a, &[], &default_model()).is_err());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -275,6 +275,10 @@ fn walker(x0: f64, y0: f64, vx: f64, vy: f64, frames: std::ops::Range<u32>) -> V
             position: Vec2::new(x0 + vx * f64::from(f), y0 + vy * f64::from(f)),
         })
         .collect()
+}
+
+fn default_model() -> GdtModel {
+    GdtConfig::default().check().unwrap()
 }
 
 fn link_config() -> LinkConfig {
@@ -295,7 +299,7 @@ fn crossing_walkers_are_linked_to_their_own_continuations() {
         walker(0.0, 80.0, 3.0, -2.0, 32..50),
         walker(0.0, 0.0, 3.0, 2.0, 30..50),
     ];
-    let links = link_segments(&segments, &link_config()).unwrap();
+    let links = link_segments(&segments, &link_config().check().unwrap()).unwrap();
     let pairs: Vec<(usize, usize)> = links.iter().map(|l| (l.from, l.to)).collect();
     assert_eq!(pairs, vec![(0, 3), (1, 2)]);
 }
@@ -307,20 +311,22 @@ fn gating_drops_impossible_pairs() {
         walker(500.0, 0.0, 1.0, 0.0, 12..20),
         walker(9.0, 0.0, 1.0, 0.0, 100..110),
     ];
-    let costs = link_costs(&segments, &link_config()).unwrap();
+    let linking = link_config().check().unwrap();
+    let costs = link_costs(&segments, &linking).unwrap();
     // 0 → 1 is too fast (491 px in 3 frames), 0 → 2 too late (91 frames); 1 → 2 too late.
     assert!(costs.is_empty(), "{costs:?}");
-    assert!(link_segments(&segments, &link_config()).unwrap().is_empty());
-    assert!(
-        link_costs(
-            &segments,
-            &LinkConfig {
-                max_speed: 0.0,
-                ..link_config()
-            }
-        )
-        .is_err()
-    );
+    assert!(link_segments(&segments, &linking).unwrap().is_empty());
+    assert!(matches!(
+        LinkConfig {
+            max_speed: 0.0,
+            ..link_config()
+        }
+        .check(),
+        Err(Error::Model(tracker_model::Error::InvalidParameter {
+            name: "max_speed",
+            ..
+        }))
+    ));
 }
 
 #[test]
@@ -336,7 +342,8 @@ fn linking_is_the_optimal_assignment() {
         walker(5.0, 15.0, 2.1, 0.5, 15..25),
     ];
     let cfg = link_config();
-    let costs = link_costs(&segments, &cfg).unwrap();
+    let linking = cfg.check().unwrap();
+    let costs = link_costs(&segments, &linking).unwrap();
     let weight = |c: f64| (cfg.new_track_cost - c).max(0.0);
     fn best(
         costs: &[(usize, usize, f64)],
@@ -356,7 +363,7 @@ fn linking_is_the_optimal_assignment() {
         skip.max(w(c) + best(costs, k + 1, used_from | (1 << i), used_to | (1 << j), w))
     }
     let optimum = best(&costs, 0, 0, 0, &weight);
-    let chosen: f64 = link_segments(&segments, &cfg)
+    let chosen: f64 = link_segments(&segments, &linking)
         .unwrap()
         .iter()
         .map(|l| weight(l.cost))
@@ -372,7 +379,7 @@ fn linking_is_the_optimal_assignment() {
 // The mask protocol
 
 #[test]
-fn mask_crossings_become_gaps_by_the_seed_rules() {
+fn mask_crossings_become_gaps_by_oh_and_jungs_rules() {
     use tracker_model::{Region2, Track, TrackId, TrackPoint, TrackSet};
     let track = |id: u64, xs: &[f64]| {
         Track::from_points(
@@ -423,14 +430,19 @@ fn degenerate_inputs_are_clear_errors() {
     let a = walker(0.0, 0.0, 1.0, 0.0, 0..10);
     // A gap of zero length: B starts right after A.
     let b = walker(0.0, 0.0, 1.0, 0.0, 10..20);
-    assert!(
-        matches!(recover_gdt(&a, &b, &GdtConfig::default()), Err(Error::Invalid(m)) if m.contains("nothing is missing"))
+    assert_eq!(
+        recover_gdt(&a, &b, &default_model()),
+        Err(Error::NoGap {
+            last_a: 9,
+            first_b: 10
+        })
     );
     // A segment too short for the filter.
     let one = walker(0.0, 0.0, 1.0, 0.0, 0..1);
     let later = walker(0.0, 0.0, 1.0, 0.0, 15..20);
-    assert!(
-        matches!(recover_gdt(&one, &later, &GdtConfig::default()), Err(Error::Invalid(m)) if m.contains("at least 2"))
+    assert_eq!(
+        recover_gdt(&one, &later, &default_model()),
+        Err(Error::SegmentTooShort { len: 1, min: 2 })
     );
     // A singular goal covariance Π_T.
     let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: 1.0 }).unwrap();
@@ -455,7 +467,63 @@ fn degenerate_inputs_are_clear_errors() {
     // A NaN observation.
     let mut bad = later.clone();
     bad[2].position.x = f64::NAN;
-    assert!(recover_gdt(&a, &bad, &GdtConfig::default()).is_err());
+    assert_eq!(
+        recover_gdt(&a, &bad, &default_model()),
+        Err(Error::NonFiniteObservation { frame: 17 })
+    );
+    // Frames out of order, in either segment and for either form.
+    let mut shuffled = later.clone();
+    // Frames 15, 18, 17, 16, 19.
+    shuffled.swap(1, 3);
+    assert_eq!(
+        recover_gdt(&a, &shuffled, &default_model()),
+        Err(Error::FramesOutOfOrder {
+            frame: 17,
+            last: 18
+        })
+    );
+    assert_eq!(
+        recover_gdt_goal_state(&a, &shuffled, &default_model()),
+        Err(Error::FramesOutOfOrder {
+            frame: 17,
+            last: 18
+        })
+    );
+    assert_eq!(
+        recover_gdt(
+            &shuffled,
+            &walker(0.0, 0.0, 1.0, 0.0, 40..45),
+            &default_model()
+        ),
+        Err(Error::FramesOutOfOrder {
+            frame: 17,
+            last: 18
+        })
+    );
+    // Baseline samples.
+    assert_eq!(
+        linear(&[0.0, 1.0], &[1.0], &[0.5]),
+        Err(Error::LengthMismatch {
+            what: "values",
+            n_times: 2,
+            len: 1
+        })
+    );
+    assert!(matches!(
+        natural_cubic_spline(&[0.0], &[1.0], &[0.5]),
+        Err(Error::TooFewSamples { len: 1, min: 2, .. })
+    ));
+    assert!(matches!(
+        linear(&[0.0, f64::NAN], &[1.0, 2.0], &[0.5]),
+        Err(Error::NonFiniteSample { index: 1, .. })
+    ));
+    assert_eq!(
+        linear(&[1.0, 0.0], &[1.0, 2.0], &[0.5]),
+        Err(Error::TimesOutOfOrder {
+            time: 0.0,
+            last: 1.0
+        })
+    );
 }
 
 #[test]
@@ -469,8 +537,9 @@ fn noise_free_constant_velocity_is_recovered_exactly() {
         measurement_variance: 1e-10,
         initial_velocity_variance: 1e6,
     };
-    let gdt = recover_gdt(&a, &b, &cfg).unwrap();
-    let goal_state = recover_gdt_goal_state(&a, &b, &cfg).unwrap();
+    let model = cfg.check().unwrap();
+    let gdt = recover_gdt(&a, &b, &model).unwrap();
+    let goal_state = recover_gdt_goal_state(&a, &b, &model).unwrap();
     let lin = recover_baseline(&a, &b, &Baseline::Linear).unwrap();
     for (k, f) in gdt.frames.iter().enumerate() {
         let truth = Vec2::new(10.0 + 2.5 * f64::from(*f), 20.0 - 1.5 * f64::from(*f));
@@ -487,7 +556,7 @@ fn noise_free_constant_velocity_is_recovered_exactly() {
 }
 
 #[test]
-fn the_seeds_special_forms_agree_with_the_general_form() {
+fn oh_and_jungs_special_forms_agree_with_the_general_form() {
     let a: Vec<SMatrix<f64, 2, 2>> = (0..6)
         .map(|t| SMatrix::<f64, 2, 2>::new(1.0, 0.3 + 0.05 * t as f64, -0.1, 0.95))
         .collect();
@@ -509,7 +578,7 @@ fn the_seeds_special_forms_agree_with_the_general_form() {
     };
     assert!(close(
         &GoalDirected::new(&a, &q, &goal, &prior).unwrap(),
-        &GoalDirected::seed_form(&a, &q, &goal, &prior).unwrap()
+        &GoalDirected::pseudo_inverse_form(&a, &q, &goal, &prior).unwrap()
     ));
     // Pseudo-inverse (eqs. 16-18), three readings of a 2-D state, Π = σ² I: exact.
     let h = SMatrix::<f64, 3, 2>::new(1.0, 0.0, 0.0, 1.0, 1.0, 1.0);
@@ -520,18 +589,18 @@ fn the_seeds_special_forms_agree_with_the_general_form() {
     };
     assert!(close(
         &GoalDirected::new(&a, &q, &tall, &prior).unwrap(),
-        &GoalDirected::seed_form(&a, &q, &tall, &prior).unwrap()
+        &GoalDirected::pseudo_inverse_form(&a, &q, &tall, &prior).unwrap()
     ));
-    // With correlated Π it is the seed's approximation and differs.
+    // With correlated Π it is Oh & Jung's approximation and differs.
     let skew = Goal {
         covariance: nalgebra::Matrix3::new(0.5, 0.4, 0.0, 0.4, 0.5, 0.0, 0.0, 0.0, 2.0),
         ..tall
     };
     assert!(!close(
         &GoalDirected::new(&a, &q, &skew, &prior).unwrap(),
-        &GoalDirected::seed_form(&a, &q, &skew, &prior).unwrap()
+        &GoalDirected::pseudo_inverse_form(&a, &q, &skew, &prior).unwrap()
     ));
-    // A position-only goal on a 4-D state has a singular HᵀH: the seed form refuses it.
+    // A position-only goal on a 4-D state has a singular HᵀH: the pseudo-inverse form refuses it.
     let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: 1.0 }).unwrap();
     let p4 = Gaussian::new(Vector4::zeros(), Matrix4::identity()).unwrap();
     let pos = Goal {
@@ -540,7 +609,7 @@ fn the_seeds_special_forms_agree_with_the_general_form() {
         covariance: Matrix2::identity(),
     };
     assert!(
-        GoalDirected::seed_form(
+        GoalDirected::pseudo_inverse_form(
             &[motion.transition_matrix(1); 3],
             &[motion.process_noise(1); 3],
             &pos,
@@ -548,4 +617,72 @@ fn the_seeds_special_forms_agree_with_the_general_form() {
         )
         .is_err()
     );
+}
+
+#[test]
+fn settings_are_checked_once_and_name_the_bad_field() {
+    let name = |r: Result<()>| match r {
+        Err(Error::InvalidParameter { name, .. })
+        | Err(Error::Model(tracker_model::Error::InvalidParameter { name, .. })) => name,
+        other => panic!("expected an invalid parameter, got {other:?}"),
+    };
+    let gdt = |c: GdtConfig| name(c.check().map(|_| ()));
+    assert_eq!(
+        gdt(GdtConfig {
+            accel_psd: -1.0,
+            ..GdtConfig::default()
+        }),
+        "accel_psd"
+    );
+    assert_eq!(
+        gdt(GdtConfig {
+            measurement_variance: 0.0,
+            ..GdtConfig::default()
+        }),
+        "measurement_variance"
+    );
+    assert_eq!(
+        gdt(GdtConfig {
+            initial_velocity_variance: f64::NAN,
+            ..GdtConfig::default()
+        }),
+        "initial_velocity_variance"
+    );
+    // No process noise is a valid (deterministic) motion model.
+    assert!(
+        GdtConfig {
+            accel_psd: 0.0,
+            ..GdtConfig::default()
+        }
+        .check()
+        .is_ok()
+    );
+    let link = |c: LinkConfig| name(c.check().map(|_| ()));
+    assert_eq!(
+        link(LinkConfig {
+            max_gap_frames: 0,
+            ..link_config()
+        }),
+        "max_gap_frames"
+    );
+    assert_eq!(
+        link(LinkConfig {
+            new_track_cost: f64::INFINITY,
+            ..link_config()
+        }),
+        "new_track_cost"
+    );
+    assert_eq!(
+        link(LinkConfig {
+            model: GdtConfig {
+                measurement_variance: -4.0,
+                ..GdtConfig::default()
+            },
+            ..link_config()
+        }),
+        "measurement_variance"
+    );
+    let checked = link_config().check().unwrap();
+    assert_eq!(*checked.config(), link_config());
+    assert_eq!(*checked.model().config(), GdtConfig::default());
 }

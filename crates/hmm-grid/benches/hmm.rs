@@ -6,8 +6,8 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use hmm_grid::{
-    BaumWelchConfig, CellGrid, Hmm, SensorModel, SpeedDistribution, StateSpace, Transitions,
-    baum_welch, posterior, viterbi,
+    BaumWelchConfig, CellGrid, Hmm, SensorModel, SpeedDistribution, StateSpace, StorageChoice,
+    Transitions, baum_welch, posterior, viterbi,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -43,7 +43,7 @@ fn dense_model(rng: &mut ChaCha8Rng) -> Hmm {
     let b: Vec<f64> = (0..400).flat_map(|_| row(rng)).collect();
     Hmm::new(
         vec![1.0 / 400.0; 400],
-        Transitions::from_dense(400, a).unwrap(),
+        Transitions::from_row_major(400, a, StorageChoice::Auto).unwrap(),
         b,
         400,
     )

@@ -17,8 +17,15 @@ pub enum Error {
         reason: String,
     },
     /// Sizes that do not fit together.
-    #[error("shape mismatch: {0}")]
-    Shape(String),
+    #[error("{what}: expected {expected}, got {got}")]
+    ShapeMismatch {
+        /// What was counted, e.g. "emission matrix entries (N × M)".
+        what: &'static str,
+        /// The count the other inputs imply.
+        expected: usize,
+        /// The count given.
+        got: usize,
+    },
     /// An observation symbol outside 0..M.
     #[error(
         "observation {index} of sequence {sequence} is symbol {symbol}, but the model has {n_symbols} symbols"
@@ -44,6 +51,21 @@ pub enum Error {
         /// Position of the first impossible observation.
         index: usize,
     },
+    /// A cell (column, row) outside the grid a state space was built from.
+    #[error("cell ({col}, {row}) is outside the {n_cols}×{n_rows} grid")]
+    CellOutsideGrid {
+        /// The column asked for.
+        col: usize,
+        /// The row asked for.
+        row: usize,
+        /// Columns of the grid.
+        n_cols: usize,
+        /// Rows of the grid.
+        n_rows: usize,
+    },
+    /// A grid operation on a state space built from a road graph.
+    #[error("the state space is a road graph, not a cell grid")]
+    NotAGrid,
     /// A configuration value out of range.
     #[error("invalid {name}: {reason}")]
     InvalidParameter {

@@ -1,5 +1,5 @@
-//! Evaluation and decoding: the scaled forward-backward recursions (Rabiner 1989; seed 002
-//! eqs. 3-11), posterior marginals, expected transition counts, Viterbi in log space (eqs.
+//! Evaluation and decoding: the scaled forward-backward recursions (Rabiner 1989; Huynh & Vu
+//! 2006 eqs. 3-11), posterior marginals, expected transition counts, Viterbi in log space (eqs.
 //! 14-18) and per-step posterior decoding (eq. 13), plus a log-space forward recursion as an
 //! independent formulation.
 //!
@@ -158,11 +158,11 @@ pub(crate) fn backward_sweep(
 pub fn backward(hmm: &Hmm, obs: &[usize], scale: &[f64]) -> Result<Vec<f64>> {
     hmm.check_observations(obs, 0)?;
     if scale.len() != obs.len() {
-        return Err(Error::Shape(format!(
-            "{} scale factors for {} observations",
-            scale.len(),
-            obs.len()
-        )));
+        return Err(Error::ShapeMismatch {
+            what: "scale factors (one per observation)",
+            expected: obs.len(),
+            got: scale.len(),
+        });
     }
     let n = hmm.n_states();
     let mut out = vec![0.0; obs.len() * n];
@@ -335,8 +335,8 @@ pub fn viterbi(hmm: &Hmm, obs: &[usize]) -> Result<(Vec<usize>, f64)> {
     Ok((path, best))
 }
 
-/// The individually most probable state at each step, argmax_i γ_t(i) (seed eq. 13). Unlike
-/// Viterbi's path it may use transitions of probability 0.
+/// The individually most probable state at each step, argmax_i γ_t(i) (Huynh & Vu 2006 eq.
+/// 13). Unlike Viterbi's path it may use transitions of probability 0.
 pub fn posterior_decode(hmm: &Hmm, obs: &[usize]) -> Result<Vec<usize>> {
     let post = posterior(hmm, obs)?;
     Ok((0..obs.len())

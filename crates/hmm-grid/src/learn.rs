@@ -1,8 +1,10 @@
-//! Baum-Welch re-estimation over several observation sequences (seed 002 eq. 12; Rabiner 1989
-//! §V.B for multiple sequences), with frozen components, pseudo-counts and a parallel E-step.
+//! Baum-Welch re-estimation over several observation sequences (Huynh & Vu 2006 eq. 12;
+//! Rabiner 1989 §V.B for multiple sequences), with frozen components, pseudo-counts and a
+//! parallel E-step.
 
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use tracker_model::ensure_non_negative;
 
 use crate::error::{Error, Result};
 use crate::inference::{add_xi, backward_sweep, forward_in};
@@ -10,6 +12,7 @@ use crate::model::Hmm;
 
 /// Which parts of λ stay fixed during training; frozen parts come out bit-identical.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct Freeze {
     /// Keep π.
     pub initial: bool,
@@ -23,21 +26,24 @@ pub struct Freeze {
 /// Transition pseudo-counts go only to transitions the model allows (a_ij > 0), so kinematic
 /// constraints survive training; initial and emission pseudo-counts smooth every entry.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct PseudoCounts {
-    /// Added to each π_i count.
+    /// Added to each π_i count (≥ 0).
     pub initial: f64,
-    /// Added to each allowed a_ij count.
+    /// Added to each allowed a_ij count (≥ 0).
     pub transitions: f64,
-    /// Added to each b_i(m) count.
+    /// Added to each b_i(m) count (≥ 0).
     pub emissions: f64,
 }
 
-/// Baum-Welch settings.
+/// Baum-Welch settings, checked once into a [`BaumWelch`] trainer by
+/// [`BaumWelchConfig::check`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct BaumWelchConfig {
     /// Upper bound on re-estimation steps.
     pub max_iterations: usize,
-    /// Stop when the total log-likelihood improves by less than this (absolute).
+    /// Stop when the total log-likelihood improves by less than this (absolute, ≥ 0).
     pub tolerance: f64,
     /// Frozen components.
     pub freeze: Freeze,
@@ -57,28 +63,22 @@ impl Default for BaumWelchConfig {
 }
 
 impl BaumWelchConfig {
-    fn check(&self) -> Result<()> {
-        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
-            return Err(Error::InvalidParameter {
-                name: "tolerance",
-                reason: format!("{} must be finite and >= 0", self.tolerance),
-            });
-        }
+    /// Checks every field (the tolerance and the pseudo-counts must be finite and ≥ 0) and
+    /// returns the trainer that runs with them.
+    pub fn check(&self) -> Result<BaumWelch> {
+        ensure_non_negative(self.tolerance, "tolerance")?;
         let pc = self.pseudo_counts;
-        for (v, name) in [
-            (pc.initial, "initial pseudo-count"),
-            (pc.transitions, "transition pseudo-count"),
-            (pc.emissions, "emission pseudo-count"),
-        ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::InvalidParameter {
-                    name,
-                    reason: format!("{v} must be finite and >= 0"),
-                });
-            }
-        }
-        Ok(())
+        ensure_non_negative(pc.initial, "pseudo_counts.initial")?;
+        ensure_non_negative(pc.transitions, "pseudo_counts.transitions")?;
+        ensure_non_negative(pc.emissions, "pseudo_counts.emissions")?;
+        Ok(BaumWelch { config: *self })
     }
+}
+
+/// A Baum-Welch trainer with a checked [`BaumWelchConfig`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BaumWelch {
+    config: BaumWelchConfig,
 }
 
 /// How training went.
@@ -226,42 +226,54 @@ fn m_step(hmm: &Hmm, stats: &Stats, cfg: &BaumWelchConfig) -> Result<Hmm> {
     Hmm::new(initial, transitions, emissions, m)
 }
 
-/// Trains `hmm` on `sequences` by Baum-Welch and returns the trained model with the
-/// log-likelihood history. Without pseudo-counts the history never decreases (EM).
+impl BaumWelch {
+    /// The settings it runs with.
+    pub fn config(&self) -> &BaumWelchConfig {
+        &self.config
+    }
+
+    /// Trains `hmm` on `sequences` and returns the trained model with the log-likelihood
+    /// history. Without pseudo-counts the history never decreases (EM).
+    pub fn fit(&self, hmm: &Hmm, sequences: &[Vec<usize>]) -> Result<(Hmm, FitReport)> {
+        let config = &self.config;
+        if sequences.is_empty() {
+            return Err(Error::Empty("training sequences"));
+        }
+        for (k, obs) in sequences.iter().enumerate() {
+            hmm.check_observations(obs, k)?;
+        }
+        let mut model = hmm.clone();
+        let mut history = Vec::new();
+        let mut stats = expected_counts(&model, sequences)?;
+        history.push(stats.log_likelihood);
+        let mut converged = false;
+        for _ in 0..config.max_iterations {
+            let next = m_step(&model, &stats, config)?;
+            let next_stats = expected_counts(&next, sequences)?;
+            let gain = next_stats.log_likelihood - stats.log_likelihood;
+            model = next;
+            stats = next_stats;
+            history.push(stats.log_likelihood);
+            if gain.abs() < config.tolerance {
+                converged = true;
+                break;
+            }
+        }
+        Ok((
+            model,
+            FitReport {
+                log_likelihoods: history,
+                converged,
+            },
+        ))
+    }
+}
+
+/// Trains `hmm` on `sequences` by Baum-Welch: `config.check()?.fit(hmm, sequences)`.
 pub fn baum_welch(
     hmm: &Hmm,
     sequences: &[Vec<usize>],
     config: &BaumWelchConfig,
 ) -> Result<(Hmm, FitReport)> {
-    config.check()?;
-    if sequences.is_empty() {
-        return Err(Error::Empty("training sequences"));
-    }
-    for (k, obs) in sequences.iter().enumerate() {
-        hmm.check_observations(obs, k)?;
-    }
-    let mut model = hmm.clone();
-    let mut history = Vec::new();
-    let mut stats = expected_counts(&model, sequences)?;
-    history.push(stats.log_likelihood);
-    let mut converged = false;
-    for _ in 0..config.max_iterations {
-        let next = m_step(&model, &stats, config)?;
-        let next_stats = expected_counts(&next, sequences)?;
-        let gain = next_stats.log_likelihood - stats.log_likelihood;
-        model = next;
-        stats = next_stats;
-        history.push(stats.log_likelihood);
-        if gain.abs() < config.tolerance {
-            converged = true;
-            break;
-        }
-    }
-    Ok((
-        model,
-        FitReport {
-            log_likelihoods: history,
-            converged,
-        },
-    ))
+    config.check()?.fit(hmm, sequences)
 }

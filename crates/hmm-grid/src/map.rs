@@ -1,17 +1,21 @@
 //! Maps: the state space of a ground target (free cells of a grid with obstacles, or the
 //! crossroads of a road graph), transitions from kinematic constraints, and an observation
-//! model from sensors whose accuracy falls with distance (seed 002 §5).
+//! model from sensors whose accuracy falls with distance (Huynh & Vu 2006 §5).
 
 use std::collections::VecDeque;
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{Frame, Track, TrackId, TrackPoint, Vec2};
+use tracker_model::{
+    Frame, Track, TrackId, TrackPoint, Vec2, ensure_non_negative, ensure_positive,
+};
 
 use crate::error::{Error, Result};
-use crate::model::{Transitions, check_row};
+use crate::transitions::{Transitions, check_row};
 
-/// A rectangular grid of square cells, some blocked by obstacles.
+/// A rectangular grid of square cells, some blocked by obstacles; checked by
+/// [`StateSpace::from_grid`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct CellGrid {
     /// Columns.
     pub n_cols: usize,
@@ -23,38 +27,130 @@ pub struct CellGrid {
     pub blocked: Vec<(usize, usize)>,
 }
 
+impl CellGrid {
+    /// Checks that the grid has cells, that the cell size is finite and positive and that
+    /// every blocked cell lies inside the grid.
+    pub fn check(&self) -> Result<()> {
+        if self.n_cols == 0 || self.n_rows == 0 {
+            return Err(Error::Empty("cell grid"));
+        }
+        ensure_positive(self.cell_size, "cell_size")?;
+        for &(col, row) in &self.blocked {
+            if col >= self.n_cols || row >= self.n_rows {
+                return Err(Error::CellOutsideGrid {
+                    col,
+                    row,
+                    n_cols: self.n_cols,
+                    n_rows: self.n_rows,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The state of every cell of a grid, row-major, `None` when blocked.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CellStates {
+    n_cols: usize,
+    n_rows: usize,
+    states: Vec<Option<usize>>,
+}
+
 /// Where a target can be and where it can go in one hop.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "RawStateSpace", into = "RawStateSpace")]
 pub struct StateSpace {
     positions: Vec<Vec2>,
     neighbours: Vec<Vec<usize>>,
-    /// For grids: the state of each cell (row-major), `None` when blocked.
-    cell_states: Option<Vec<Option<usize>>>,
+    /// For grids: the state of each cell.
+    cells: Option<CellStates>,
+}
+
+/// The serialised form, re-checked on reading so that no index can point outside the states.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawStateSpace {
+    positions: Vec<Vec2>,
+    neighbours: Vec<Vec<usize>>,
+    cells: Option<CellStates>,
+}
+
+impl TryFrom<RawStateSpace> for StateSpace {
+    type Error = Error;
+    fn try_from(raw: RawStateSpace) -> Result<Self> {
+        let n = raw.positions.len();
+        if n == 0 {
+            return Err(Error::Empty("state space"));
+        }
+        if raw
+            .positions
+            .iter()
+            .any(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
+            return Err(Error::Model(tracker_model::Error::NonFinite {
+                what: "state position",
+            }));
+        }
+        if raw.neighbours.len() != n {
+            return Err(Error::ShapeMismatch {
+                what: "neighbour lists (one per state)",
+                expected: n,
+                got: raw.neighbours.len(),
+            });
+        }
+        let out_of_range = |s: &usize| *s >= n;
+        if let Some((i, _)) = raw
+            .neighbours
+            .iter()
+            .enumerate()
+            .find(|(_, v)| v.iter().any(out_of_range))
+        {
+            return Err(Error::InvalidParameter {
+                name: "neighbours",
+                reason: format!("state {i} lists a neighbour outside 0..{n}"),
+            });
+        }
+        if let Some(cells) = &raw.cells {
+            if cells.states.len() != cells.n_cols * cells.n_rows {
+                return Err(Error::ShapeMismatch {
+                    what: "cell states (n_cols × n_rows)",
+                    expected: cells.n_cols * cells.n_rows,
+                    got: cells.states.len(),
+                });
+            }
+            if cells.states.iter().flatten().any(out_of_range) {
+                return Err(Error::InvalidParameter {
+                    name: "cells",
+                    reason: format!("a cell maps to a state outside 0..{n}"),
+                });
+            }
+        }
+        Ok(Self {
+            positions: raw.positions,
+            neighbours: raw.neighbours,
+            cells: raw.cells,
+        })
+    }
+}
+
+impl From<StateSpace> for RawStateSpace {
+    fn from(s: StateSpace) -> Self {
+        Self {
+            positions: s.positions,
+            neighbours: s.neighbours,
+            cells: s.cells,
+        }
+    }
 }
 
 impl StateSpace {
     /// One state per free cell (row-major order), linked to its free 4-neighbours.
     pub fn from_grid(grid: &CellGrid) -> Result<Self> {
-        if grid.n_cols == 0 || grid.n_rows == 0 {
-            return Err(Error::Empty("cell grid"));
-        }
-        if !(grid.cell_size.is_finite() && grid.cell_size > 0.0) {
-            return Err(Error::InvalidParameter {
-                name: "cell_size",
-                reason: format!("{} must be finite and > 0", grid.cell_size),
-            });
-        }
+        grid.check()?;
         let mut blocked = vec![false; grid.n_cols * grid.n_rows];
         for &(c, r) in &grid.blocked {
-            if c >= grid.n_cols || r >= grid.n_rows {
-                return Err(Error::InvalidParameter {
-                    name: "blocked cell",
-                    reason: format!(
-                        "({c}, {r}) is outside the {}×{} grid",
-                        grid.n_cols, grid.n_rows
-                    ),
-                });
-            }
             blocked[r * grid.n_cols + c] = true;
         }
         let mut cell_states = vec![None; blocked.len()];
@@ -99,7 +195,11 @@ impl StateSpace {
         Ok(Self {
             positions,
             neighbours,
-            cell_states: Some(cell_states),
+            cells: Some(CellStates {
+                n_cols: grid.n_cols,
+                n_rows: grid.n_rows,
+                states: cell_states,
+            }),
         })
     }
 
@@ -135,7 +235,7 @@ impl StateSpace {
         Ok(Self {
             positions: crossroads,
             neighbours,
-            cell_states: None,
+            cells: None,
         })
     }
 
@@ -159,13 +259,19 @@ impl StateSpace {
         &self.neighbours[i]
     }
 
-    /// For a grid, the state of cell (`col`, `row`), if free.
-    pub fn state_of_cell(&self, col: usize, row: usize, n_cols: usize) -> Option<usize> {
-        self.cell_states
-            .as_ref()?
-            .get(row * n_cols + col)
-            .copied()
-            .flatten()
+    /// For a grid, the state of cell (`col`, `row`): `None` when the cell is blocked. Errors if
+    /// the cell lies outside the grid, or if the state space is a road graph.
+    pub fn state_of_cell(&self, col: usize, row: usize) -> Result<Option<usize>> {
+        let cells = self.cells.as_ref().ok_or(Error::NotAGrid)?;
+        if col >= cells.n_cols || row >= cells.n_rows {
+            return Err(Error::CellOutsideGrid {
+                col,
+                row,
+                n_cols: cells.n_cols,
+                n_rows: cells.n_rows,
+            });
+        }
+        Ok(cells.states[row * cells.n_cols + col])
     }
 
     /// The track of a state path (as returned by [`viterbi`](crate::viterbi) or
@@ -254,7 +360,7 @@ impl StateSpace {
     /// fix points at. From state i the fix lands on state m with probability
     /// ∝ exp(−‖p_i − p_m‖² / 2σ_i²), where σ_i = `base_sigma` + `sigma_per_distance` × the
     /// distance from i to the nearest sensor: accurate near a sensor, vaguer away from one,
-    /// always with the dominant diagonal the seed describes.
+    /// always with the dominant diagonal Huynh & Vu (2006) describe.
     pub fn sensor_emissions(&self, sensors: &SensorModel) -> Result<Vec<f64>> {
         sensors.check()?;
         let n = self.n_states();
@@ -282,8 +388,35 @@ impl StateSpace {
 
 /// P(the target moves k hops in one step), k = 0, 1, …
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(
+    deny_unknown_fields,
+    try_from = "RawSpeedDistribution",
+    into = "RawSpeedDistribution"
+)]
 pub struct SpeedDistribution {
     probabilities: Vec<f64>,
+}
+
+/// The serialised form, checked by [`SpeedDistribution::new`] on reading.
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSpeedDistribution {
+    probabilities: Vec<f64>,
+}
+
+impl TryFrom<RawSpeedDistribution> for SpeedDistribution {
+    type Error = Error;
+    fn try_from(raw: RawSpeedDistribution) -> Result<Self> {
+        Self::new(raw.probabilities)
+    }
+}
+
+impl From<SpeedDistribution> for RawSpeedDistribution {
+    fn from(s: SpeedDistribution) -> Self {
+        Self {
+            probabilities: s.probabilities,
+        }
+    }
 }
 
 impl SpeedDistribution {
@@ -302,8 +435,10 @@ impl SpeedDistribution {
     }
 }
 
-/// Sensors at known positions and how their accuracy degrades with distance.
+/// Sensors at known positions and how their accuracy degrades with distance; checked by
+/// [`StateSpace::sensor_emissions`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SensorModel {
     /// Sensor positions (at least one).
     pub sensors: Vec<Vec2>,
@@ -314,21 +449,23 @@ pub struct SensorModel {
 }
 
 impl SensorModel {
-    fn check(&self) -> Result<()> {
+    /// Checks that there is at least one sensor, every position is finite, `base_sigma` is
+    /// finite and > 0 and `sigma_per_distance` finite and ≥ 0.
+    pub fn check(&self) -> Result<()> {
         if self.sensors.is_empty() {
             return Err(Error::Empty("sensor list"));
         }
-        let base_ok = self.base_sigma.is_finite() && self.base_sigma > 0.0;
-        let slope_ok = self.sigma_per_distance.is_finite() && self.sigma_per_distance >= 0.0;
-        if !(base_ok && slope_ok) {
-            return Err(Error::InvalidParameter {
-                name: "sensor accuracy",
-                reason: format!(
-                    "base_sigma {} must be > 0 and sigma_per_distance {} >= 0",
-                    self.base_sigma, self.sigma_per_distance
-                ),
-            });
+        if self
+            .sensors
+            .iter()
+            .any(|p| !(p.x.is_finite() && p.y.is_finite()))
+        {
+            return Err(Error::Model(tracker_model::Error::NonFinite {
+                what: "sensor position",
+            }));
         }
+        ensure_positive(self.base_sigma, "base_sigma")?;
+        ensure_non_negative(self.sigma_per_distance, "sigma_per_distance")?;
         Ok(())
     }
 }

@@ -145,7 +145,7 @@ fn sparse_and_dense_paths_agree() {
     pi[0] = 1.0;
     let sparse = Hmm::new(pi, a, space.sensor_emissions(&sensors).unwrap(), n).unwrap();
     assert!(sparse.transitions().is_sparse());
-    let dense = sparse.with_transition_storage(false);
+    let dense = sparse.with_transition_storage(StorageChoice::Dense);
     assert!(!dense.transitions().is_sparse());
     let (_, obs) = sparse.sample(300, &mut ChaCha8Rng::seed_from_u64(3));
     let (fs, fd) = (
@@ -187,11 +187,24 @@ fn sparse_and_dense_paths_agree() {
         .transitions(&SpeedDistribution::new(vec![0.2, 0.8]).unwrap())
         .unwrap()
         .dense_values();
-    assert!(Transitions::from_dense(400, values).unwrap().is_sparse());
+    let auto = Transitions::from_row_major(400, values.clone(), StorageChoice::Auto).unwrap();
+    assert!(auto.is_sparse());
+    assert_eq!(auto.dense_values(), values);
+    let forced = Transitions::from_row_major(400, values, StorageChoice::Dense).unwrap();
+    assert!(!forced.is_sparse());
+    assert_eq!(forced.to_storage(StorageChoice::Auto), auto);
+    let full = vec![0.5, 0.5, 0.5, 0.5];
     assert!(
-        !Transitions::from_dense(2, vec![0.5, 0.5, 0.5, 0.5])
+        !Transitions::from_row_major(2, full.clone(), StorageChoice::Auto)
             .unwrap()
             .is_sparse()
+    );
+    let forced = Transitions::from_row_major(2, full.clone(), StorageChoice::Sparse).unwrap();
+    assert!(forced.is_sparse());
+    assert_eq!(forced.dense_values(), full);
+    assert_eq!(
+        forced.to_storage(StorageChoice::Dense),
+        Transitions::dense(2, full).unwrap()
     );
 }
 
@@ -335,7 +348,11 @@ fn invalid_models_and_observations_are_clear_errors() {
     ));
     assert!(matches!(
         Transitions::dense(2, vec![1.0; 3]),
-        Err(Error::Shape(_))
+        Err(Error::ShapeMismatch {
+            expected: 4,
+            got: 3,
+            ..
+        })
     ));
     assert!(matches!(
         Transitions::sparse(vec![vec![(0, 1.0)], vec![(5, 1.0)]]),
@@ -358,7 +375,11 @@ fn invalid_models_and_observations_are_clear_errors() {
     ));
     assert!(matches!(
         Hmm::new(vec![1.0], a(), vec![1.0, 0.0, 0.0, 1.0], 2),
-        Err(Error::Shape(_))
+        Err(Error::ShapeMismatch {
+            expected: 2,
+            got: 1,
+            ..
+        })
     ));
     let hmm = Hmm::new(vec![1.0, 0.0], a(), vec![1.0, 0.0, 1.0, 0.0], 2).unwrap();
     assert_eq!(
@@ -405,7 +426,7 @@ fn invalid_models_and_observations_are_clear_errors() {
 fn models_round_trip_through_serde_and_reject_corrupt_input() {
     for hmm in [
         random_hmm(4, 3, false, 70),
-        random_hmm(4, 3, true, 71).with_transition_storage(true),
+        random_hmm(4, 3, true, 71).with_transition_storage(StorageChoice::Sparse),
     ] {
         let json = serde_json::to_string(&hmm).unwrap();
         assert_eq!(serde_json::from_str::<Hmm>(&json).unwrap(), hmm);
@@ -424,8 +445,8 @@ fn maps_build_valid_models() {
     };
     let space = StateSpace::from_grid(&grid).unwrap();
     assert_eq!(space.n_states(), 8);
-    assert_eq!(space.state_of_cell(1, 1, 3), None);
-    let corner = space.state_of_cell(0, 0, 3).unwrap();
+    assert_eq!(space.state_of_cell(1, 1).unwrap(), None);
+    let corner = space.state_of_cell(0, 0).unwrap().unwrap();
     assert_eq!(space.neighbours(corner).len(), 2);
     assert_eq!(space.position(corner), Vec2::new(5.0, 5.0));
     // Stay 0.2, one hop 0.8 split over the two neighbours.
@@ -433,8 +454,9 @@ fn maps_build_valid_models() {
         .transitions(&SpeedDistribution::new(vec![0.2, 0.8]).unwrap())
         .unwrap();
     assert_relative_eq!(a.get(corner, corner), 0.2);
-    assert_relative_eq!(a.get(corner, space.state_of_cell(1, 0, 3).unwrap()), 0.4);
-    assert_eq!(a.get(corner, space.state_of_cell(2, 2, 3).unwrap()), 0.0);
+    let cell = |col, row| space.state_of_cell(col, row).unwrap().unwrap();
+    assert_relative_eq!(a.get(corner, cell(1, 0)), 0.4);
+    assert_eq!(a.get(corner, cell(2, 2)), 0.0);
     let road = StateSpace::from_road_graph(
         vec![
             Vec2::new(0.0, 0.0),
@@ -466,16 +488,158 @@ fn maps_build_valid_models() {
     // Accuracy falls with distance from the sensor.
     assert!(b[0] > b[2 * 3 + 2]);
     assert!(StateSpace::from_road_graph(vec![Vec2::new(0.0, 0.0)], &[(0, 1)]).is_err());
-    assert!(
+    assert_eq!(
         StateSpace::from_grid(&CellGrid {
             n_cols: 2,
             n_rows: 2,
             cell_size: 1.0,
             blocked: vec![(5, 0)]
         })
-        .is_err()
+        .unwrap_err(),
+        Error::CellOutsideGrid {
+            col: 5,
+            row: 0,
+            n_cols: 2,
+            n_rows: 2
+        }
     );
     assert!(SpeedDistribution::new(vec![0.5, 0.6]).is_err());
+}
+
+#[test]
+fn cells_outside_the_grid_are_typed_errors() {
+    // A 3-wide, 2-high grid: column 3 of row 0 would alias cell (0, 1) in row-major order.
+    let space = StateSpace::from_grid(&CellGrid {
+        n_cols: 3,
+        n_rows: 2,
+        cell_size: 1.0,
+        blocked: vec![],
+    })
+    .unwrap();
+    assert_eq!(space.state_of_cell(2, 1).unwrap(), Some(5));
+    let outside = |col, row| Error::CellOutsideGrid {
+        col,
+        row,
+        n_cols: 3,
+        n_rows: 2,
+    };
+    assert_eq!(space.state_of_cell(3, 0).unwrap_err(), outside(3, 0));
+    assert_eq!(space.state_of_cell(0, 2).unwrap_err(), outside(0, 2));
+    assert_eq!(
+        space.state_of_cell(usize::MAX, usize::MAX).unwrap_err(),
+        outside(usize::MAX, usize::MAX)
+    );
+    let road = StateSpace::from_road_graph(vec![Vec2::new(0.0, 0.0)], &[]).unwrap();
+    assert_eq!(road.state_of_cell(0, 0).unwrap_err(), Error::NotAGrid);
+}
+
+#[test]
+fn configs_are_checked_once_and_reject_unknown_fields() {
+    let checked = BaumWelchConfig::default().check().unwrap();
+    assert_eq!(checked.config(), &BaumWelchConfig::default());
+    for (config, name) in [
+        (
+            BaumWelchConfig {
+                tolerance: f64::NAN,
+                ..BaumWelchConfig::default()
+            },
+            "tolerance",
+        ),
+        (
+            BaumWelchConfig {
+                pseudo_counts: PseudoCounts {
+                    transitions: -0.5,
+                    ..PseudoCounts::default()
+                },
+                ..BaumWelchConfig::default()
+            },
+            "pseudo_counts.transitions",
+        ),
+    ] {
+        assert!(
+            matches!(
+                config.check(),
+                Err(Error::Model(tracker_model::Error::InvalidParameter { name: n, .. })) if n == name
+            ),
+            "{name}"
+        );
+    }
+    // Partial configs take the defaults; misspelt fields are refused.
+    let partial: BaumWelchConfig =
+        serde_json::from_str(r#"{"max_iterations": 3, "freeze": {"initial": true}}"#).unwrap();
+    assert_eq!(partial.max_iterations, 3);
+    assert!(partial.freeze.initial && !partial.freeze.emissions);
+    assert_eq!(partial.tolerance, BaumWelchConfig::default().tolerance);
+    for bad in [
+        r#"{"max_iteration": 3}"#,
+        r#"{"freeze": {"emission": true}}"#,
+        r#"{"pseudo_counts": {"transition": 1.0}}"#,
+    ] {
+        assert!(
+            serde_json::from_str::<BaumWelchConfig>(bad).is_err(),
+            "{bad}"
+        );
+    }
+    assert!(
+        serde_json::from_str::<CellGrid>(
+            r#"{"n_cols": 2, "n_rows": 2, "cell_size": 1.0, "blocked": [], "wrap": true}"#
+        )
+        .is_err()
+    );
+    assert!(
+        serde_json::from_str::<SensorModel>(
+            r#"{"sensors": [], "base_sigma": 1.0, "sigma_per_distance": 0.0, "gain": 2.0}"#
+        )
+        .is_err()
+    );
+    let sensors = |base_sigma, sigma_per_distance| SensorModel {
+        sensors: vec![Vec2::new(0.0, 0.0)],
+        base_sigma,
+        sigma_per_distance,
+    };
+    assert!(sensors(1.0, 0.0).check().is_ok());
+    assert!(sensors(0.0, 0.0).check().is_err());
+    assert!(sensors(1.0, -0.1).check().is_err());
+    // A speed distribution is re-checked when read.
+    let speed = SpeedDistribution::new(vec![0.25, 0.75]).unwrap();
+    let json = serde_json::to_string(&speed).unwrap();
+    assert_eq!(
+        serde_json::from_str::<SpeedDistribution>(&json).unwrap(),
+        speed
+    );
+    assert!(serde_json::from_str::<SpeedDistribution>(r#"{"probabilities": [0.5, 0.6]}"#).is_err());
+}
+
+#[test]
+fn state_spaces_round_trip_through_serde_and_reject_corrupt_input() {
+    let grid = StateSpace::from_grid(&CellGrid {
+        n_cols: 3,
+        n_rows: 2,
+        cell_size: 1.0,
+        blocked: vec![(1, 0)],
+    })
+    .unwrap();
+    let road =
+        StateSpace::from_road_graph(vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0)], &[(0, 1)])
+            .unwrap();
+    for space in [grid, road] {
+        let json = serde_json::to_string(&space).unwrap();
+        assert_eq!(serde_json::from_str::<StateSpace>(&json).unwrap(), space);
+    }
+    for bad in [
+        // A neighbour outside the states.
+        r#"{"positions": [[0.0, 0.0]], "neighbours": [[1]], "cells": null}"#,
+        // One neighbour list for two states.
+        r#"{"positions": [[0.0, 0.0], [1.0, 0.0]], "neighbours": [[1]], "cells": null}"#,
+        // A cell pointing at a missing state.
+        r#"{"positions": [[0.0, 0.0]], "neighbours": [[]], "cells": {"n_cols": 1, "n_rows": 1, "states": [3]}}"#,
+        // Fewer cells than the grid has.
+        r#"{"positions": [[0.0, 0.0]], "neighbours": [[]], "cells": {"n_cols": 2, "n_rows": 1, "states": [0]}}"#,
+        // No states at all.
+        r#"{"positions": [], "neighbours": [], "cells": null}"#,
+    ] {
+        assert!(serde_json::from_str::<StateSpace>(bad).is_err(), "{bad}");
+    }
 }
 
 #[test]

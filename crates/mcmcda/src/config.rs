@@ -1,14 +1,14 @@
-//! The MCMCDA model and sampler parameters (TAC 2009 §II, §IV), checked once into the
-//! log-constants the sampler uses.
+//! The MCMCDA model and sampler parameters (Oh, Russell & Sastry 2009 §II, §IV), checked once
+//! into the log-constants the sampler uses.
 
 use nalgebra::{Matrix2, Matrix4};
 use serde::{Deserialize, Serialize};
 use tracker_model::{
-    BoundingBox, ConstantVelocity2, TransitionModel, check_positive_semidefinite,
+    BoundingBox, ConstantVelocity2, TransitionModel, check_positive_semidefinite, ensure_in_range,
     ensure_open_probability, ensure_positive,
 };
 
-use crate::error::{Error, Result};
+use crate::error::{Result, invalid_parameter};
 
 /// The eight MCMCDA moves, in the paper's order (Fig. 4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
@@ -64,7 +64,7 @@ impl Move {
 /// ζ(d): the distribution of the gap d ∈ {1..d̄} drawn when a track grows. The paper says only
 /// that it is "computed based on p_d".
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum GapDistribution {
     /// ζ(d) ∝ p_d (1 − p_d)^(d−1): the chance that the next detection comes d scans later
     /// (default).
@@ -75,7 +75,7 @@ pub enum GapDistribution {
 
 /// How a track's Kalman filter starts (the paper defers this to a technical report).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum TrackInit {
     /// Position N(y₁, R), velocity N(0, σ_v² I) with σ_v² = `velocity_variance`, or v̄²/3 (the
     /// variance of a speed uniform on the disc of radius v̄) when unset; likelihood terms from
@@ -96,10 +96,10 @@ pub enum TrackInit {
 /// How the posterior scores the end of a track whose last measurement comes before the last
 /// scan.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum TrackEnd {
-    /// TAC 2009 eq. 7 (and the authors' code): the target disappeared right after its last
-    /// detection, a factor p_z (default).
+    /// Oh, Russell & Sastry 2009 eq. 7 (and the authors' code): the target disappeared right
+    /// after its last detection, a factor p_z (default).
     Disappeared,
     /// The exact probability of no further detection in the window: the target disappears
     /// at some later scan, undetected until then, or survives undetected to the window's end,
@@ -121,9 +121,9 @@ impl Default for MoveWeights {
     }
 }
 
-/// Everything that defines the MCMCDA posterior and its proposal. Defaults are the TAC 2009
-/// batch experiment (region [0, 1000]², 10 scans, p_d = 0.9, λ_f V = 1, p_z = 1e-4, d̄ = 5,
-/// v̄ = 100, Q = R = diag(100, 100)) with 10 targets.
+/// Everything that defines the MCMCDA posterior and its proposal. Defaults are the batch
+/// experiment of Oh, Russell & Sastry 2009 (region [0, 1000]², 10 scans, p_d = 0.9,
+/// λ_f V = 1, p_z = 1e-4, d̄ = 5, v̄ = 100, Q = R = diag(100, 100)) with 10 targets.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct McmcdaConfig {
@@ -174,7 +174,7 @@ impl Default for McmcdaConfig {
             p_disappear: 1e-4,
             p_detect: 0.9,
             motion: ConstantVelocity2::mcmcda(1.0, 100.0)
-                .unwrap_or_else(|_| unreachable!("constant model is valid")),
+                .expect("a period of 1 and a variance of 100 are valid"),
             measurement_noise: Matrix2::identity() * 100.0,
             max_gap: 5,
             max_speed: 100.0,
@@ -211,9 +211,10 @@ impl McmcdaConfig {
         let mut widths: Vec<f64> = boxes.iter().map(|b| b.width).collect();
         widths.sort_by(f64::total_cmp);
         let Some(&median) = widths.get(widths.len() / 2) else {
-            return Err(Error::Invalid(
-                "a model scaled to boxes needs at least one box".into(),
-            ));
+            return Err(tracker_model::Error::Empty {
+                what: "boxes for a box-scaled model",
+            }
+            .into());
         };
         let w = median.max(1.0);
         let (mut lo, mut hi) = (
@@ -283,24 +284,20 @@ impl McmcdaConfig {
         ensure_open_probability(self.p_detect, "p_detect")?;
         ensure_open_probability(self.stop_probability, "stop_probability")?;
         ensure_positive(self.max_speed, "max_speed")?;
-        if !(0.0..=1.0).contains(&self.head_probability) {
-            return Err(Error::Invalid(format!(
-                "head_probability {} must lie in [0, 1]",
-                self.head_probability
-            )));
-        }
+        ensure_in_range(self.head_probability, 0.0, 1.0, "head_probability")?;
         if self.max_gap == 0 || self.max_gap > 64 {
-            return Err(Error::Invalid(format!(
-                "max_gap is {}; it must lie in 1..=64",
-                self.max_gap
-            )));
+            return Err(invalid_parameter(
+                "max_gap",
+                format!("{} must lie in 1..=64", self.max_gap),
+            ));
         }
         tracker_model::cholesky_checked(&self.measurement_noise, "measurement_noise")?;
         let weights = &self.move_weights.0;
         if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) || weights[0] <= 0.0 {
-            return Err(Error::Invalid(format!(
-                "move weights {weights:?} must be finite and >= 0, with birth > 0"
-            )));
+            return Err(invalid_parameter(
+                "move_weights",
+                format!("{weights:?} must be finite and ≥ 0, with birth > 0"),
+            ));
         }
         let dt = self.motion.dt_s();
         let radius_per_scan = self.max_speed * dt;

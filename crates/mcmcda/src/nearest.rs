@@ -1,6 +1,6 @@
-//! Nearest-neighbour baselines on the same model: the greedy multi-scan nearest-neighbour
-//! filter (NNF) that initialises MCMCDA in TAC 2009 §V, and global nearest neighbour (GNN)
-//! with optimal assignment and M-of-N confirmation.
+//! Nearest-neighbour baselines on the same model: the greedy multi-scan nearest-neighbour filter
+//! (NNF) that initialises MCMCDA in Oh, Russell & Sastry 2009 §V, and global nearest neighbour
+//! (GNN) with optimal assignment and M-of-N confirmation.
 //!
 //! Both run one Kalman filter per track, scan by scan. A measurement can continue a track
 //! only if the pair is allowed in Ω (gap ≤ d̄ scans, inside the neighbourhood radius) and its
@@ -8,11 +8,14 @@
 //! Unused measurements start tentative tracks. Every output track therefore is a feasible
 //! MCMCDA track.
 
+use std::ops::RangeInclusive;
+
 use serde::{Deserialize, Serialize};
+use tracker_model::{GATE_CHI2_2D, ensure_positive};
 
 use crate::config::Model;
-use crate::error::{Error, Result};
-use crate::partition::Partition;
+use crate::error::{Result, invalid_parameter};
+use crate::partition::{Partition, check_window};
 use crate::problem::{MeasId, Problem};
 use crate::track_filter::Node;
 
@@ -47,10 +50,26 @@ impl NearestNeighbourConfig {
     pub fn greedy_init(model: &Model) -> Self {
         Self {
             assignment: Assignment::Greedy,
-            gate: 13.8,
+            gate: GATE_CHI2_2D,
             confirm_hits: 2,
             confirm_window: model.max_gap() + 1,
         }
+    }
+
+    /// Checks the gate (finite, > 0) and the confirmation rule (2 ≤ M ≤ N). Every function
+    /// that takes the configuration calls this first.
+    pub fn check(&self) -> Result<()> {
+        ensure_positive(self.gate, "gate")?;
+        if self.confirm_hits < 2 || self.confirm_window < self.confirm_hits {
+            return Err(invalid_parameter(
+                "confirm_hits",
+                format!(
+                    "confirmation {} of {} needs 2 ≤ M ≤ N (confirm_hits ≤ confirm_window)",
+                    self.confirm_hits, self.confirm_window
+                ),
+            ));
+        }
+        Ok(())
     }
 }
 
@@ -59,7 +78,7 @@ impl Default for NearestNeighbourConfig {
     fn default() -> Self {
         Self {
             assignment: Assignment::Optimal,
-            gate: 13.8,
+            gate: GATE_CHI2_2D,
             confirm_hits: 2,
             confirm_window: 3,
         }
@@ -84,25 +103,11 @@ impl Live {
 pub fn nearest_neighbour_tracks(
     model: &Model,
     problem: &Problem,
-    window: std::ops::RangeInclusive<usize>,
+    window: RangeInclusive<usize>,
     config: &NearestNeighbourConfig,
 ) -> Result<Vec<Vec<MeasId>>> {
-    if !(config.gate.is_finite() && config.gate > 0.0) {
-        return Err(Error::Invalid(format!("gate {} must be > 0", config.gate)));
-    }
-    if config.confirm_hits < 2 || config.confirm_window < config.confirm_hits {
-        return Err(Error::Invalid(format!(
-            "confirmation {} of {} needs 2 <= M <= N",
-            config.confirm_hits, config.confirm_window
-        )));
-    }
-    let (lo, hi) = (*window.start(), *window.end());
-    if lo > hi || hi >= problem.n_scans() {
-        return Err(Error::Invalid(format!(
-            "window {lo}..={hi} does not fit {} scans",
-            problem.n_scans()
-        )));
-    }
+    config.check()?;
+    let (lo, hi) = check_window(problem, &window)?;
     let d_bar = problem.max_gap();
     let mut live: Vec<Live> = Vec::new();
     let mut done: Vec<Vec<MeasId>> = Vec::new();
@@ -220,7 +225,7 @@ fn optimal(
 pub fn greedy_initial_partition<'a>(
     model: &'a Model,
     problem: &'a Problem,
-    window: std::ops::RangeInclusive<usize>,
+    window: RangeInclusive<usize>,
 ) -> Result<Partition<'a>> {
     let tracks = nearest_neighbour_tracks(
         model,

@@ -1,4 +1,4 @@
-//! Online (sliding-window) MCMCDA (TAC 2009 Algorithm 4).
+//! Online (sliding-window) MCMCDA (Oh, Russell & Sastry 2009 Algorithm 4).
 //!
 //! After each new scan the chain runs on the last `window` scans, starting from the previous
 //! MAP restricted to the window with tracks that were alive greedily extended into the new
@@ -11,10 +11,10 @@ use std::collections::{BTreeMap, HashMap};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use tracker_model::{Frame, TrackSet, Vec2};
+use tracker_model::{Frame, GATE_CHI2_2D, TrackSet, Vec2, ensure_positive};
 
 use crate::config::Model;
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid_parameter};
 use crate::estimates::smoothed_tracks;
 use crate::partition::{FREE, Partition};
 use crate::problem::{MeasId, Problem};
@@ -40,9 +40,24 @@ impl Default for OnlineConfig {
         Self {
             window: 14,
             samples_per_scan: 2000,
-            extension_gate: 13.8,
+            extension_gate: GATE_CHI2_2D,
             coast_scans: 2,
         }
+    }
+}
+
+impl OnlineConfig {
+    /// Checks the window (at least 2 scans, the shortest a track spans) and the extension
+    /// gate (finite, > 0). [`OnlineTracker::new`] calls this.
+    pub fn check(&self) -> Result<()> {
+        if self.window < 2 {
+            return Err(invalid_parameter(
+                "window",
+                format!("{} scans; it needs at least 2", self.window),
+            ));
+        }
+        ensure_positive(self.extension_gate, "extension_gate")?;
+        Ok(())
     }
 }
 
@@ -86,14 +101,9 @@ pub struct OnlineTracker {
 
 impl OnlineTracker {
     /// A tracker whose first scan is `first_frame`; every random draw comes from ChaCha8
-    /// seeded with `seed`.
+    /// seeded with `seed`. Fails if `config` does not pass [`OnlineConfig::check`].
     pub fn new(model: Model, first_frame: Frame, config: OnlineConfig, seed: u64) -> Result<Self> {
-        if config.window < 2 {
-            return Err(Error::Invalid(format!(
-                "window of {} scans; it needs at least 2",
-                config.window
-            )));
-        }
+        config.check()?;
         Ok(Self {
             problem: Problem::empty(&model, first_frame),
             model,
@@ -120,10 +130,10 @@ impl OnlineTracker {
     pub fn add_late(&mut self, frame: Frame, position: Vec2) -> Result<MeasId> {
         let lo = self.problem.first_frame() + self.open_from as Frame;
         if frame < lo {
-            return Err(Error::Invalid(format!(
-                "late measurement for frame {frame} arrives after its scan left the window \
-                 (which starts at frame {lo})"
-            )));
+            return Err(Error::LateMeasurement {
+                frame,
+                window_start: lo,
+            });
         }
         self.problem.add_measurement(frame, position)
     }
@@ -131,7 +141,7 @@ impl OnlineTracker {
     /// Processes the scan at `frame` (after any empty scans needed to reach it).
     pub fn push_scan(&mut self, frame: Frame, points: &[Vec2]) -> Result<OnlineStep> {
         self.problem.push_scan(frame, points)?;
-        let hi = self.problem.n_scans() - 1;
+        let hi = *self.problem.all_scans()?.end();
         let lo = self.window_start();
         // Scans leaving the window now (one, or more after a jump in frames) keep the
         // associations of the last MAP that saw them: those become final.
@@ -199,8 +209,10 @@ impl OnlineTracker {
     /// Commits the current window and returns every track (label as id) smoothed over its
     /// committed measurements, with the associations.
     pub fn finish(mut self) -> Result<OnlineResult> {
-        if self.open_from < self.problem.n_scans() {
-            self.commit(self.open_from..=self.problem.n_scans() - 1);
+        if let Ok(all) = self.problem.all_scans()
+            && self.open_from <= *all.end()
+        {
+            self.commit(self.open_from..=*all.end());
         }
         let mut tracks = TrackSet::new();
         let mut associations = Vec::new();

@@ -46,13 +46,7 @@ impl<'a> Partition<'a> {
         problem: &'a Problem,
         window: RangeInclusive<usize>,
     ) -> Result<Self> {
-        let (lo, hi) = (*window.start(), *window.end());
-        if lo > hi || hi >= problem.n_scans() {
-            return Err(Error::Invalid(format!(
-                "window {lo}..={hi} does not fit the problem's {} scans",
-                problem.n_scans()
-            )));
-        }
+        let (lo, hi) = check_window(problem, &window)?;
         let mut owner = vec![OUTSIDE; problem.n_measurements()];
         let mut n_in = 0usize;
         for s in lo..=hi {
@@ -85,41 +79,57 @@ impl<'a> Partition<'a> {
     ) -> Result<Self> {
         let mut partition = Self::empty(model, problem, window)?;
         for (k, track) in tracks.iter().enumerate() {
-            partition.check_track(track).map_err(|reason| {
-                Error::Invalid(format!("track {k} ({track:?}) is not feasible: {reason}"))
-            })?;
+            partition.check_track(k, track)?;
             partition.insert(track.clone(), None);
         }
         Ok(partition)
     }
 
-    /// Why `track` cannot be added to this partition, if it cannot.
-    fn check_track(&self, track: &[MeasId]) -> std::result::Result<(), String> {
+    /// Why `track` (number `k` in the caller's list) cannot be added to this partition, if
+    /// it cannot.
+    fn check_track(&self, k: usize, track: &[MeasId]) -> Result<()> {
         if track.len() < 2 {
-            return Err("fewer than 2 measurements".into());
+            return Err(Error::TrackTooShort {
+                track: k,
+                len: track.len(),
+            });
         }
-        for &m in track {
-            match self.owner.get(m as usize) {
-                None => return Err(format!("measurement {m} does not exist")),
-                Some(&OUTSIDE) => return Err(format!("measurement {m} is outside the window")),
+        for &id in track {
+            match self.owner.get(id as usize) {
+                None => return Err(Error::UnknownMeasurement { track: k, id }),
+                Some(&OUTSIDE) => return Err(Error::MeasurementOutsideWindow { track: k, id }),
                 Some(&FREE) => {}
-                Some(_) => return Err(format!("measurement {m} is already in a track")),
+                Some(_) => return Err(Error::MeasurementTaken { track: k, id }),
             }
         }
         for pair in track.windows(2) {
-            let (a, b) = (pair[0], pair[1]);
-            let (ta, tb) = (self.problem.scan_of(a), self.problem.scan_of(b));
+            let (first, second) = (pair[0], pair[1]);
+            let (ta, tb) = (self.problem.scan_of(first), self.problem.scan_of(second));
             if tb <= ta {
-                return Err(format!(
-                    "measurements {a} and {b} are not in increasing scans"
-                ));
+                return Err(Error::ScansNotIncreasing {
+                    track: k,
+                    first,
+                    second,
+                });
             }
-            let d = tb - ta;
-            if d > self.problem.max_gap() {
-                return Err(format!("gap of {d} scans between {a} and {b} exceeds d̄"));
+            let gap = tb - ta;
+            let max_gap = self.problem.max_gap();
+            if gap > max_gap {
+                return Err(Error::GapTooLong {
+                    track: k,
+                    first,
+                    second,
+                    gap,
+                    max_gap,
+                });
             }
-            if !self.problem.within(a, b, d) {
-                return Err(format!("{a} and {b} are too far apart for {d} scans"));
+            if !self.problem.within(first, second, gap) {
+                return Err(Error::TooFarApart {
+                    track: k,
+                    first,
+                    second,
+                    gap,
+                });
             }
         }
         Ok(())
@@ -161,7 +171,7 @@ impl<'a> Partition<'a> {
         }
     }
 
-    /// log P(ω | Y) up to a constant that depends on Y only (TAC 2009 eq. 9).
+    /// log P(ω | Y) up to a constant that depends on Y only (Oh, Russell & Sastry 2009 eq. 9).
     pub fn log_posterior(&self) -> f64 {
         self.baseline + self.tracks.iter().map(|t| t.weight).sum::<f64>()
     }
@@ -245,26 +255,44 @@ impl<'a> Partition<'a> {
     pub fn check_invariants(&self) -> Result<()> {
         let mut fresh = Self::empty(self.model, self.problem, self.window())?;
         for (k, t) in self.tracks.iter().enumerate() {
-            fresh
-                .check_track(&t.meas)
-                .map_err(|r| Error::Invalid(format!("track {k} infeasible: {r}")))?;
+            fresh.check_track(k, &t.meas)?;
             fresh.insert(t.meas.clone(), None);
             let w = fresh.tracks[k].weight;
             if (w - t.weight).abs() > 1e-9 * w.abs().max(1.0) {
-                return Err(Error::Invalid(format!(
-                    "track {k}: cached weight {} but fresh {w}",
-                    t.weight
-                )));
+                return Err(Error::StaleWeight {
+                    track: k,
+                    cached: t.weight,
+                    fresh: w,
+                });
             }
             for (i, &m) in t.meas.iter().enumerate() {
                 if self.owner[m as usize] != k as u32 || self.slot[m as usize] != i as u32 {
-                    return Err(Error::Invalid(format!("owner/slot map wrong for {m}")));
+                    return Err(Error::OwnerMapWrong { id: m });
                 }
             }
         }
-        if fresh.owner != self.owner {
-            return Err(Error::Invalid("owner map has stale entries".into()));
+        if let Some(stale) = (0..self.owner.len()).find(|&m| fresh.owner[m] != self.owner[m]) {
+            return Err(Error::OwnerMapWrong {
+                id: stale as MeasId,
+            });
         }
         Ok(())
     }
+}
+
+/// The window's first and last scan indices, if it is a non-empty range of the problem's
+/// scans.
+pub(crate) fn check_window(
+    problem: &Problem,
+    window: &RangeInclusive<usize>,
+) -> Result<(usize, usize)> {
+    let (lo, hi) = (*window.start(), *window.end());
+    if lo > hi || hi >= problem.n_scans() {
+        return Err(Error::WindowOutOfRange {
+            start: lo,
+            end: hi,
+            n_scans: problem.n_scans(),
+        });
+    }
+    Ok((lo, hi))
 }

@@ -1,6 +1,8 @@
 //! The measurements Y of a data-association problem and the neighbourhood structure
-//! L(y, t, d) = { y' ∈ Y_{t+d} : ‖y − y'‖ ≤ d·v̄·T_s } (TAC 2009 eq. 27), computed once as
-//! measurements arrive and kept in both directions.
+//! L(y, t, d) = { y' ∈ Y_{t+d} : ‖y − y'‖ ≤ d·v̄·T_s } (Oh, Russell & Sastry 2009 eq. 27),
+//! computed once as measurements arrive and kept in both directions.
+
+use std::ops::RangeInclusive;
 
 use tracker_model::{Frame, Scan, Vec2};
 
@@ -62,11 +64,17 @@ impl Problem {
     pub fn push_scan(&mut self, frame: Frame, points: &[Vec2]) -> Result<Vec<MeasId>> {
         let next = self.first_frame + self.scans.len() as Frame;
         if frame < next {
-            return Err(Error::Invalid(format!(
-                "scan for frame {frame} arrives after frame {}; add late measurements with \
-                 add_measurement",
-                next.saturating_sub(1)
-            )));
+            return Err(if self.scans.is_empty() {
+                Error::FrameBeforeFirst {
+                    frame,
+                    first: self.first_frame,
+                }
+            } else {
+                Error::FramesOutOfOrder {
+                    frame,
+                    last: next - 1,
+                }
+            });
         }
         while self.first_frame + (self.scans.len() as Frame) <= frame {
             self.scans.push(Vec::new());
@@ -89,15 +97,12 @@ impl Problem {
             .checked_sub(self.first_frame)
             .map(|s| s as usize)
             .filter(|s| *s < self.scans.len())
-            .ok_or_else(|| {
-                Error::Invalid(format!(
-                    "frame {frame} is outside the scans held ({}..{})",
-                    self.first_frame,
-                    self.first_frame + self.scans.len() as Frame
-                ))
+            .ok_or(Error::FrameNotHeld {
+                frame,
+                first: self.first_frame,
+                end: self.first_frame + self.scans.len() as Frame,
             })?;
-        let id = MeasId::try_from(self.positions.len())
-            .map_err(|_| Error::Invalid("more than 2^32 measurements".into()))?;
+        let id = MeasId::try_from(self.positions.len()).map_err(|_| Error::TooManyMeasurements)?;
         self.positions.push(position);
         self.scan_of.push(scan as u32);
         let d_bar = self.max_gap;
@@ -139,6 +144,27 @@ impl Problem {
     /// Number of scans.
     pub fn n_scans(&self) -> usize {
         self.scans.len()
+    }
+
+    /// Every scan index, `0..=n_scans() − 1`: the window of a whole-problem (batch) run.
+    /// Fails with [`Error::EmptyProblem`] when the problem holds no scans.
+    ///
+    /// ```
+    /// use mcmcda::{Error, McmcdaConfig, Problem};
+    /// use tracker_model::Vec2;
+    ///
+    /// let model = McmcdaConfig::default().check()?;
+    /// let mut problem = Problem::empty(&model, 10);
+    /// assert_eq!(problem.all_scans(), Err(Error::EmptyProblem));
+    /// problem.push_scan(12, &[Vec2::new(1.0, 2.0)])?;
+    /// assert_eq!(problem.all_scans()?, 0..=2);
+    /// # Ok::<(), mcmcda::Error>(())
+    /// ```
+    pub fn all_scans(&self) -> Result<RangeInclusive<usize>> {
+        match self.scans.len() {
+            0 => Err(Error::EmptyProblem),
+            n => Ok(0..=n - 1),
+        }
     }
 
     /// Number of measurements.

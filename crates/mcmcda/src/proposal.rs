@@ -1,5 +1,5 @@
-//! The proposal distribution of multi-scan MCMCDA (TAC 2009 §IV-B): how tracks grow, and the
-//! exact probability q(ω → ω') of every move, evaluated from the partition alone.
+//! The proposal distribution of multi-scan MCMCDA (Oh, Russell & Sastry 2009 §IV-B): how tracks
+//! grow, and the exact probability q(ω → ω') of every move, evaluated from the partition alone.
 //!
 //! Probabilities are evaluated by functions separate from the sampling code, so the two can
 //! be checked against each other (the tests compare proposal frequencies with these q, and
@@ -28,6 +28,27 @@ fn log_sum_exp(terms: &[f64]) -> f64 {
 pub(crate) enum End {
     Tail,
     Head,
+}
+
+/// Whether growth may stop before its first step. A track needs two measurements, so growth
+/// that starts from a single kept measurement must add one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum FirstStep {
+    /// Growth may stop at once (with probability γ), leaving the track as it is.
+    MayStop,
+    /// The first step always draws a measurement; if none is free the move is rejected.
+    Mandatory,
+}
+
+impl FirstStep {
+    /// The first step of an update that keeps the first `kept` measurements in growth order.
+    pub(crate) fn of_update(kept: usize) -> Self {
+        if kept == 1 {
+            FirstStep::Mandatory
+        } else {
+            FirstStep::MayStop
+        }
+    }
 }
 
 impl Partition<'_> {
@@ -71,20 +92,21 @@ impl Partition<'_> {
     }
 
     /// Grows a track from `start`, appending to `out`: repeat { stop with probability γ
-    /// (unless this is a mandatory step); draw d ~ ζ; C = L(y, t, d) ∩ Free; stop if C is
-    /// empty; append a uniform member of C }. Towards the head, "after" reads "before" and
-    /// `out` receives measurements in growth order (backwards in time). Returns false if a
-    /// mandatory step found C empty (the move is rejected).
+    /// (unless this is a mandatory first step); draw d ~ ζ; C = L(y, t, d) ∩ Free; stop if
+    /// C is empty; append a uniform member of C }. Towards the head, "after" reads "before"
+    /// and `out` receives measurements in growth order (backwards in time). Returns false if
+    /// a mandatory step found C empty (the move is rejected).
     pub(crate) fn grow<R: Rng + ?Sized>(
         &self,
         start: MeasId,
         end: End,
-        mut mandatory: bool,
+        first: FirstStep,
         out: &mut Vec<MeasId>,
         candidates: &mut Vec<MeasId>,
         rng: &mut R,
     ) -> bool {
         let gamma = self.model.config.stop_probability;
+        let mut mandatory = first == FirstStep::Mandatory;
         let mut y = start;
         loop {
             if !mandatory && rng.random_bool(gamma) {
@@ -114,8 +136,9 @@ impl Partition<'_> {
         start: MeasId,
         end: End,
         tail: &[MeasId],
-        mandatory_first: bool,
+        first: FirstStep,
     ) -> f64 {
+        let mandatory_first = first == FirstStep::Mandatory;
         if tail.is_empty() && mandatory_first {
             return f64::NEG_INFINITY;
         }
@@ -176,7 +199,7 @@ impl Partition<'_> {
             + self.model.log_zeta[d1 - 1]
             - (n_births as f64).ln()
             - (n_second as f64).ln()
-            + self.log_grow_probability(track[1], End::Tail, &track[2..], false)
+            + self.log_grow_probability(track[1], End::Tail, &track[2..], FirstStep::MayStop)
     }
 
     /// |S(ω)|: the split points (k, i) with |τ_k| ≥ 4 and both parts keeping ≥ 2.
@@ -295,7 +318,12 @@ impl Partition<'_> {
         if to.len() > from.len() && common == from.len() {
             terms.push(
                 xi(Move::Extension).ln()
-                    + self.log_grow_probability(from[common - 1], end, &to[common..], false),
+                    + self.log_grow_probability(
+                        from[common - 1],
+                        end,
+                        &to[common..],
+                        FirstStep::MayStop,
+                    ),
             );
         }
         if from.len() >= 3 && to.len() >= 2 && to.len() < from.len() && common == to.len() {
@@ -303,7 +331,10 @@ impl Partition<'_> {
         }
         let log_update = xi(Move::Update).ln() - (from.len() as f64).ln();
         for r in 1..=common.min(from.len()) {
-            terms.push(log_update + self.log_grow_probability(to[r - 1], end, &to[r..], r == 1));
+            terms.push(
+                log_update
+                    + self.log_grow_probability(to[r - 1], end, &to[r..], FirstStep::of_update(r)),
+            );
         }
         terms
     }

@@ -1,6 +1,6 @@
-//! Slow, independent routes to what the sampler computes incrementally, for tests and for
-//! users checking a partition: the log posterior from the per-scan counts of TAC 2009 eq. 9
-//! with each track filtered by tracker-model's general Kalman filter, and the enumeration of
+//! Slow, independent routes to what the sampler computes incrementally, for tests and for users
+//! checking a partition: the log posterior from the per-scan counts of Oh, Russell & Sastry 2009
+//! eq. 9 with each track filtered by tracker-model's general Kalman filter, and the enumeration of
 //! every feasible partition of a tiny problem.
 
 use nalgebra::Vector4;

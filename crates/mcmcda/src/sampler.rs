@@ -1,6 +1,6 @@
-//! Multi-scan MCMCDA (TAC 2009 Algorithm 3): a Metropolis-Hastings chain over partitions with
-//! the eight moves, the MAP estimate (best sample seen), an optional running MMSE functional,
-//! and independent chains in parallel.
+//! Multi-scan MCMCDA (Oh, Russell & Sastry 2009 Algorithm 3): a Metropolis-Hastings chain over
+//! partitions with the eight moves, the MAP estimate (best sample seen), an optional running MMSE
+//! functional, and independent chains in parallel.
 
 use rand::{Rng, RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -11,7 +11,7 @@ use crate::config::Move;
 use crate::error::Result;
 use crate::partition::{Partition, TrackState};
 use crate::problem::MeasId;
-use crate::proposal::End;
+use crate::proposal::{End, FirstStep};
 
 /// How often each move was proposed and accepted.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -233,7 +233,7 @@ impl<'a, R: Rng> Chain<'a, R> {
         s.grow(
             y2,
             End::Tail,
-            false,
+            FirstStep::MayStop,
             &mut track,
             &mut self.candidates,
             &mut self.rng,
@@ -361,7 +361,7 @@ impl<'a, R: Rng> Chain<'a, R> {
                 self.state.grow(
                     from[len - 1],
                     end,
-                    false,
+                    FirstStep::MayStop,
                     &mut self.grown,
                     &mut self.candidates,
                     &mut self.rng,
@@ -379,7 +379,7 @@ impl<'a, R: Rng> Chain<'a, R> {
                 self.state.grow(
                     from[r - 1],
                     end,
-                    r == 1,
+                    FirstStep::of_update(r),
                     &mut self.grown,
                     &mut self.candidates,
                     &mut self.rng,

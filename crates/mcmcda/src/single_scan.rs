@@ -1,16 +1,17 @@
-//! Single-scan MCMCDA (TAC 2009 Algorithms 1 and 2): the joint probabilistic data
-//! association (JPDA) probabilities β for a known number of targets, estimated by a Markov
-//! chain over the feasible joint events instead of enumerating them, and the JPDA state
+//! Single-scan MCMCDA (Oh, Russell & Sastry 2009 Algorithms 1 and 2): the joint probabilistic
+//! data association (JPDA) probabilities β for a known number of targets, estimated by a
+//! Markov chain over the feasible joint events instead of enumerating them, and the JPDA state
 //! update. [`jpda_exact`] enumerates every event, for small problems and for checking.
 
 use nalgebra::{Matrix4, Vector2, Vector4};
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 use tracker_model::{
-    Gaussian, LinearObservation, ObservationModel, ensure_open_probability, ensure_positive,
+    GATE_CHI2_2D, Gaussian, LinearObservation, ObservationModel, ensure_open_probability,
+    ensure_positive,
 };
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid_parameter};
 
 /// Settings of single-scan association.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -37,7 +38,7 @@ impl Default for SingleScanConfig {
         Self {
             p_detect: 0.9,
             clutter_density: 1e-4,
-            gate: 13.8,
+            gate: GATE_CHI2_2D,
             burn_in: 10_000,
             samples: 100_000,
             laziness: 0.5,
@@ -64,16 +65,26 @@ struct Edge {
     log_likelihood: f64,
 }
 
-fn check(config: &SingleScanConfig, measurements: &[Vector2<f64>]) -> Result<()> {
-    ensure_open_probability(config.p_detect, "p_detect")?;
-    ensure_positive(config.clutter_density, "clutter_density")?;
-    ensure_positive(config.gate, "gate")?;
-    if !(0.0..1.0).contains(&config.laziness) {
-        return Err(Error::Invalid(format!(
-            "laziness {} must lie in [0, 1)",
-            config.laziness
-        )));
+impl SingleScanConfig {
+    /// Checks p_d ∈ (0, 1), λ_f > 0, gate > 0 and laziness ∈ [0, 1). [`single_scan_mcmcda`]
+    /// and [`jpda_exact`] call this first.
+    pub fn check(&self) -> Result<()> {
+        ensure_open_probability(self.p_detect, "p_detect")?;
+        ensure_positive(self.clutter_density, "clutter_density")?;
+        ensure_positive(self.gate, "gate")?;
+        if !(0.0..1.0).contains(&self.laziness) {
+            return Err(invalid_parameter(
+                "laziness",
+                format!("{} must lie in [0, 1)", self.laziness),
+            ));
+        }
+        Ok(())
     }
+}
+
+/// Checks the configuration and that every measurement is finite.
+fn check_inputs(config: &SingleScanConfig, measurements: &[Vector2<f64>]) -> Result<()> {
+    config.check()?;
     if measurements
         .iter()
         .any(|m| !(m.x.is_finite() && m.y.is_finite()))
@@ -109,7 +120,7 @@ fn validate(
 }
 
 /// log of an edge's factor in P(ω | Y) relative to leaving both ends unmatched:
-/// p_d P(y | target) / ((1 − p_d) λ_f)  (TAC 2009 eq. 26).
+/// p_d P(y | target) / ((1 − p_d) λ_f)  (Oh, Russell & Sastry 2009 eq. 26).
 fn edge_gain(edge: &Edge, config: &SingleScanConfig) -> f64 {
     config.p_detect.ln() + edge.log_likelihood
         - (-config.p_detect).ln_1p()
@@ -125,7 +136,7 @@ pub fn single_scan_mcmcda<R: Rng + ?Sized>(
     config: &SingleScanConfig,
     rng: &mut R,
 ) -> Result<JpdaResult> {
-    check(config, measurements)?;
+    check_inputs(config, measurements)?;
     let edges = validate(predicted, sensor, measurements, config.gate)?;
     let gains: Vec<f64> = edges.iter().map(|e| edge_gain(e, config)).collect();
     let (n_targets, n_meas) = (predicted.len(), measurements.len());
@@ -187,7 +198,7 @@ pub fn jpda_exact(
     measurements: &[Vector2<f64>],
     config: &SingleScanConfig,
 ) -> Result<JpdaResult> {
-    check(config, measurements)?;
+    check_inputs(config, measurements)?;
     let edges = validate(predicted, sensor, measurements, config.gate)?;
     let n_targets = predicted.len();
     let mut options: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n_targets];

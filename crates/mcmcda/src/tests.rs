@@ -11,7 +11,9 @@ use tracker_model::{ConstantVelocity2, Measurement, Origin, Scan, SimulationConf
 
 use crate::reference::{enumerate_partitions, log_posterior_by_counts};
 use crate::sampler::Chain;
-use crate::{McmcdaConfig, Model, Move, Partition, Problem, TrackEnd, TrackInit, run_chains};
+use crate::{
+    Error, McmcdaConfig, Model, Move, Partition, Problem, TrackEnd, TrackInit, run_chains,
+};
 
 fn scan(frame: u32, points: &[(f64, f64)]) -> Scan {
     Scan {
@@ -52,7 +54,7 @@ fn tiny_scans() -> Vec<Scan> {
 }
 
 fn exact_posterior(model: &Model, problem: &Problem) -> HashMap<Vec<Vec<u32>>, f64> {
-    let window = 0..=problem.n_scans() - 1;
+    let window = problem.all_scans().unwrap();
     let all = enumerate_partitions(model, problem, window.clone()).unwrap();
     let lps: Vec<f64> = all
         .iter()
@@ -74,7 +76,7 @@ fn chain_frequencies(
 ) -> HashMap<Vec<Vec<u32>>, f64> {
     let mut counts: HashMap<Vec<Vec<u32>>, u64> = HashMap::new();
     for c in 0..n_chains {
-        let start = Partition::empty(model, problem, 0..=problem.n_scans() - 1).unwrap();
+        let start = Partition::empty(model, problem, problem.all_scans().unwrap()).unwrap();
         let mut chain = Chain::new(start, ChaCha8Rng::seed_from_u64(100 + c));
         for _ in 0..n_steps {
             chain.step();
@@ -177,7 +179,7 @@ fn incremental_posterior_equals_recomputation_after_every_move() {
         .check()
         .unwrap();
         let problem = Problem::from_scans(&model, &sim.scans).unwrap();
-        let window = 0..=problem.n_scans() - 1;
+        let window = problem.all_scans().unwrap();
         let start = Partition::empty(&model, &problem, window.clone()).unwrap();
         let mut chain = Chain::new(start, ChaCha8Rng::seed_from_u64(9));
         let mut accepted = [0u32; 8];
@@ -244,7 +246,7 @@ fn every_move_is_undone_by_its_reverse() {
     .check()
     .unwrap();
     let problem = Problem::from_scans(&model, &sim.scans).unwrap();
-    let start = Partition::empty(&model, &problem, 0..=problem.n_scans() - 1).unwrap();
+    let start = Partition::empty(&model, &problem, problem.all_scans().unwrap()).unwrap();
     let mut chain = Chain::new(start, ChaCha8Rng::seed_from_u64(4));
     chain.force_accept = true;
     let mut undone = [0u32; 8];
@@ -293,7 +295,7 @@ fn best_chain_does_not_depend_on_the_thread_count() {
     .check()
     .unwrap();
     let problem = Problem::from_scans(&model, &sim.scans).unwrap();
-    let start = Partition::empty(&model, &problem, 0..=problem.n_scans() - 1).unwrap();
+    let start = Partition::empty(&model, &problem, problem.all_scans().unwrap()).unwrap();
     let run_in = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
@@ -311,15 +313,42 @@ fn best_chain_does_not_depend_on_the_thread_count() {
 fn infeasible_partitions_are_rejected_with_reasons() {
     let model = tiny_config().check().unwrap();
     let problem = Problem::from_scans(&model, &tiny_scans()).unwrap();
-    let err = |tracks: &[Vec<u32>]| {
-        Partition::from_tracks(&model, &problem, 0..=2, tracks)
-            .unwrap_err()
-            .to_string()
+    let err =
+        |tracks: &[Vec<u32>]| Partition::from_tracks(&model, &problem, 0..=2, tracks).unwrap_err();
+    let check = |tracks: &[Vec<u32>], expected: Error, message: &str| {
+        let e = err(tracks);
+        assert_eq!(e, expected);
+        assert!(e.to_string().contains(message), "{e}");
     };
-    assert!(err(&[vec![0]]).contains("fewer than 2"));
-    assert!(err(&[vec![0, 1]]).contains("increasing scans"));
-    assert!(err(&[vec![0, 2], vec![2, 4]]).contains("already in a track"));
-    assert!(err(&[vec![0, 99]]).contains("does not exist"));
+    check(
+        &[vec![0]],
+        Error::TrackTooShort { track: 0, len: 1 },
+        "fewer than 2",
+    );
+    check(
+        &[vec![0, 1]],
+        Error::ScansNotIncreasing {
+            track: 0,
+            first: 0,
+            second: 1,
+        },
+        "increasing scans",
+    );
+    check(
+        &[vec![0, 2], vec![2, 4]],
+        Error::MeasurementTaken { track: 1, id: 2 },
+        "already in a track",
+    );
+    check(
+        &[vec![0, 99]],
+        Error::UnknownMeasurement { track: 0, id: 99 },
+        "does not exist",
+    );
+    let two_scans = Partition::from_tracks(&model, &problem, 0..=1, &[vec![0, 2, 4]]);
+    assert_eq!(
+        two_scans.unwrap_err(),
+        Error::MeasurementOutsideWindow { track: 0, id: 4 }
+    );
     let far = McmcdaConfig {
         max_speed: 1.0,
         ..tiny_config()
@@ -327,11 +356,33 @@ fn infeasible_partitions_are_rejected_with_reasons() {
     .check()
     .unwrap();
     let problem_far = Problem::from_scans(&far, &tiny_scans()).unwrap();
-    assert!(
-        Partition::from_tracks(&far, &problem_far, 0..=2, &[vec![0, 3]])
-            .unwrap_err()
-            .to_string()
-            .contains("too far apart")
+    let e = Partition::from_tracks(&far, &problem_far, 0..=2, &[vec![0, 3]]).unwrap_err();
+    assert_eq!(
+        e,
+        Error::TooFarApart {
+            track: 0,
+            first: 0,
+            second: 3,
+            gap: 1
+        }
+    );
+    assert!(e.to_string().contains("too far apart"), "{e}");
+    let short_gap = McmcdaConfig {
+        max_gap: 1,
+        ..tiny_config()
+    }
+    .check()
+    .unwrap();
+    let problem_short = Problem::from_scans(&short_gap, &tiny_scans()).unwrap();
+    assert_eq!(
+        Partition::from_tracks(&short_gap, &problem_short, 0..=2, &[vec![0, 4]]).unwrap_err(),
+        Error::GapTooLong {
+            track: 0,
+            first: 0,
+            second: 4,
+            gap: 2,
+            max_gap: 1
+        }
     );
 }
 
@@ -433,7 +484,7 @@ fn gnn_and_the_chain_recover_separated_targets() {
     let scans = three_walkers(8, &[(3, 1), (4, 1), (6, 2)]);
     let model = McmcdaConfig::default().check().unwrap();
     let problem = Problem::from_scans(&model, &scans).unwrap();
-    let window = 0..=problem.n_scans() - 1;
+    let window = problem.all_scans().unwrap();
     // The true partition by construction: each walker's measurements in scan order.
     let mut truth: Vec<Vec<u32>> = vec![Vec::new(); 3];
     let mut id = 0;
@@ -487,8 +538,15 @@ fn online_tracker_keeps_labels_and_takes_late_measurements() {
         }
     }
     // Too late: frame 5 left the window long ago.
-    let err = tracker.add_late(5, late).unwrap_err().to_string();
-    assert!(err.contains("left the window"), "{err}");
+    let err = tracker.add_late(5, late).unwrap_err();
+    assert_eq!(
+        err,
+        Error::LateMeasurement {
+            frame: 5,
+            window_start: 24
+        }
+    );
+    assert!(err.to_string().contains("left the window"), "{err}");
     let result = tracker.finish().unwrap();
     assert_eq!(result.tracks.len(), 3, "one label per walker");
     let mut lengths: Vec<usize> = result.associations.iter().map(|(_, t)| t.len()).collect();
@@ -514,11 +572,26 @@ fn bad_input_gives_errors_not_panics() {
     let nan = scan(0, &[(f64::NAN, 1.0)]);
     assert!(Problem::from_scans(&model, &[nan]).is_err());
     let unordered = [scan(3, &[(1.0, 1.0)]), scan(1, &[(1.0, 1.0)])];
-    assert!(
-        Problem::from_scans(&model, &unordered)
-            .unwrap_err()
-            .to_string()
-            .contains("arrives after")
+    let err = Problem::from_scans(&model, &unordered).unwrap_err();
+    assert_eq!(err, Error::FramesOutOfOrder { frame: 1, last: 3 });
+    assert!(err.to_string().contains("arrives after"), "{err}");
+    let mut empty = Problem::empty(&model, 4);
+    assert_eq!(empty.all_scans(), Err(Error::EmptyProblem));
+    assert_eq!(
+        empty.push_scan(2, &[]),
+        Err(Error::FrameBeforeFirst { frame: 2, first: 4 })
+    );
+    assert_eq!(
+        empty.add_measurement(4, Vector2::new(1.0, 1.0)),
+        Err(Error::FrameNotHeld {
+            frame: 4,
+            first: 4,
+            end: 4
+        })
+    );
+    assert_eq!(
+        crate::batch_mcmcda(&model, &empty, &crate::BatchConfig::default()).unwrap_err(),
+        Error::EmptyProblem
     );
     for bad in [
         McmcdaConfig {
@@ -545,7 +618,14 @@ fn bad_input_gives_errors_not_panics() {
         assert!(bad.check().is_err(), "{bad:?} accepted");
     }
     let problem = Problem::from_scans(&model, &[scan(0, &[(1.0, 1.0)])]).unwrap();
-    assert!(Partition::empty(&model, &problem, 0..=3).is_err());
+    assert_eq!(
+        Partition::empty(&model, &problem, 0..=3).unwrap_err(),
+        Error::WindowOutOfRange {
+            start: 0,
+            end: 3,
+            n_scans: 1
+        }
+    );
     // A single-scan problem: nothing can be a track, and the chain just stays empty.
     let start = Partition::empty(&model, &problem, 0..=0).unwrap();
     assert!(run_chains(&start, 1, 100, 0).unwrap().tracks.is_empty());
@@ -628,7 +708,7 @@ fn proposal_frequencies_match_the_computed_q() {
         track(3, 0..2),
         track(3, 2..5),
     ];
-    let window = 0..=problem.n_scans() - 1;
+    let window = problem.all_scans().unwrap();
     let start = Partition::from_tracks(&model, &problem, window, &tracks).unwrap();
     assert!(start.n_tracks() >= 4, "{} tracks", start.n_tracks());
     let from = start.canonical();
@@ -694,4 +774,144 @@ fn online_tracker_commits_scans_skipped_by_a_jump_in_frames() {
     lengths.sort_unstable();
     // Every received measurement is committed to its walker (a gap of 3 scans ≤ d̄).
     assert_eq!(lengths, vec![28, 28, 28]);
+}
+
+#[test]
+fn every_config_is_checked_before_it_runs() {
+    use crate::{
+        BatchConfig, NearestNeighbourConfig, OnlineConfig, OnlineTracker, SingleScanConfig,
+        batch_mcmcda, jpda_exact, nearest_neighbour_tracks,
+    };
+    use tracker_model::{Gaussian, LinearObservation};
+    let parameter = |e: Error| match e {
+        Error::Model(tracker_model::Error::InvalidParameter { name, .. }) => name,
+        other => panic!("not a parameter error: {other}"),
+    };
+    let model = McmcdaConfig::default().check().unwrap();
+    let problem = Problem::from_scans(&model, &three_walkers(4, &[])).unwrap();
+    let window = problem.all_scans().unwrap();
+    for (bad, name) in [
+        (
+            NearestNeighbourConfig {
+                gate: 0.0,
+                ..NearestNeighbourConfig::default()
+            },
+            "gate",
+        ),
+        (
+            NearestNeighbourConfig {
+                confirm_hits: 4,
+                confirm_window: 3,
+                ..NearestNeighbourConfig::default()
+            },
+            "confirm_hits",
+        ),
+    ] {
+        assert_eq!(parameter(bad.check().unwrap_err()), name);
+        let e = nearest_neighbour_tracks(&model, &problem, window.clone(), &bad).unwrap_err();
+        assert_eq!(parameter(e), name);
+    }
+    for (bad, name) in [
+        (
+            OnlineConfig {
+                window: 1,
+                ..OnlineConfig::default()
+            },
+            "window",
+        ),
+        (
+            OnlineConfig {
+                extension_gate: f64::NAN,
+                ..OnlineConfig::default()
+            },
+            "extension_gate",
+        ),
+    ] {
+        assert_eq!(parameter(bad.check().unwrap_err()), name);
+        let e = OnlineTracker::new(model.clone(), 0, bad, 1).err().unwrap();
+        assert_eq!(parameter(e), name);
+    }
+    let bad = SingleScanConfig {
+        laziness: 1.0,
+        ..SingleScanConfig::default()
+    };
+    assert_eq!(parameter(bad.check().unwrap_err()), "laziness");
+    let prior = Gaussian::new(nalgebra::Vector4::zeros(), Matrix4::identity()).unwrap();
+    let sensor = LinearObservation::leading_components(Matrix2::identity()).unwrap();
+    let e = jpda_exact(&[prior], &sensor, &[Vector2::new(0.0, 0.0)], &bad).unwrap_err();
+    assert_eq!(parameter(e), "laziness");
+    let bad = BatchConfig {
+        chains: 0,
+        ..BatchConfig::default()
+    };
+    assert_eq!(parameter(bad.check().unwrap_err()), "chains");
+    assert_eq!(
+        parameter(batch_mcmcda(&model, &problem, &bad).unwrap_err()),
+        "chains"
+    );
+    // The defaults pass their own checks.
+    NearestNeighbourConfig::default().check().unwrap();
+    NearestNeighbourConfig::greedy_init(&model).check().unwrap();
+    OnlineConfig::default().check().unwrap();
+    SingleScanConfig::default().check().unwrap();
+    BatchConfig::default().check().unwrap();
+}
+
+#[test]
+fn configs_written_in_toml_reject_unknown_fields() {
+    use crate::{BatchConfig, NearestNeighbourConfig, OnlineConfig, SingleScanConfig};
+    fn rejects<T: serde::de::DeserializeOwned>(text: &str) {
+        let err = toml::from_str::<T>(text).err().map(|e| e.to_string());
+        assert!(
+            err.as_deref()
+                .is_some_and(|e| e.contains("unknown field") || e.contains("unexpected keys")),
+            "{text:?} accepted as {}: {err:?}",
+            std::any::type_name::<T>()
+        );
+    }
+    rejects::<McmcdaConfig>("p_detct = 0.8");
+    rejects::<McmcdaConfig>("track_init = { first_measurement = { velocity_varience = 1.0 } }");
+    rejects::<NearestNeighbourConfig>("gates = 9.2");
+    rejects::<OnlineConfig>("windows = 5");
+    rejects::<SingleScanConfig>("burnin = 10");
+    rejects::<BatchConfig>("chain = 2");
+    // The same fields spelled right are read.
+    let model: McmcdaConfig = toml::from_str(
+        "p_detect = 0.8\ntrack_init = { first_measurement = { velocity_variance = 1.0 } }",
+    )
+    .unwrap();
+    assert_eq!(
+        model,
+        McmcdaConfig {
+            p_detect: 0.8,
+            track_init: TrackInit::FirstMeasurement {
+                velocity_variance: Some(1.0)
+            },
+            ..McmcdaConfig::default()
+        }
+    );
+    let batch: BatchConfig = toml::from_str("chains = 2").unwrap();
+    assert_eq!(
+        batch,
+        BatchConfig {
+            chains: 2,
+            ..BatchConfig::default()
+        }
+    );
+}
+
+#[test]
+fn batch_mcmcda_recovers_separated_targets() {
+    use crate::{BatchConfig, batch_mcmcda};
+    let scans = three_walkers(8, &[(3, 1), (6, 2)]);
+    let model = McmcdaConfig::default().check().unwrap();
+    let problem = Problem::from_scans(&model, &scans).unwrap();
+    let run = batch_mcmcda(&model, &problem, &BatchConfig::default()).unwrap();
+    let mut lengths: Vec<usize> = run.tracks.iter().map(Vec::len).collect();
+    lengths.sort_unstable();
+    assert_eq!(lengths, vec![7, 7, 8]);
+    // The same as the greedy start and run_chains by hand.
+    let start =
+        crate::greedy_initial_partition(&model, &problem, problem.all_scans().unwrap()).unwrap();
+    assert_eq!(run, run_chains(&start, 1, 50_000, 0).unwrap());
 }

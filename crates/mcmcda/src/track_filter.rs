@@ -6,6 +6,7 @@
 //! (extension, reduction, update, split, merge, switch) filters only the new part.
 
 use nalgebra::{Matrix2, Matrix4, Matrix4x2, Vector2, Vector4};
+use tracker_model::LN_2PI;
 
 use crate::config::{Model, TrackInit};
 use crate::problem::{MeasId, Problem};
@@ -18,8 +19,6 @@ pub(crate) struct Node {
     /// Σ of the log predictive densities of the track's measurements up to this one.
     cum_log_likelihood: f64,
 }
-
-const LN_2PI: f64 = 1.837_877_066_409_345_3;
 
 impl Model {
     /// A track starting at position `y`: mean [y, 0], covariance diag(R, v I) with per-axis
@@ -116,8 +115,8 @@ impl Model {
         }
     }
 
-    /// The track's term of the log posterior (all terms of TAC 2009 eq. 9 that the track
-    /// changes, with the false-alarm baseline taken out):
+    /// The track's term of the log posterior (all terms of Oh, Russell & Sastry 2009 eq. 9 that
+    /// the track changes, with the false-alarm baseline taken out):
     /// log λ_b + [ends before the last scan] log p_z (or see [`crate::TrackEnd`])
     /// + (t_last − t_first) log(1 − p_z)
     /// + |τ| (log p_d − log λ_f) + (t_last − t_first + 1 − |τ|) log(1 − p_d) + Σ log N(...).

@@ -4,7 +4,9 @@
 //! measurement is a box z = [c_x, c_y, w, h].
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{BoundingBox, ensure_open_probability, ensure_positive};
+use tracker_model::{
+    BoundingBox, LN_2PI, ensure_in_range, ensure_open_probability, ensure_positive,
+};
 
 use crate::error::{Error, Result};
 
@@ -15,9 +17,9 @@ pub type BoxMeasurement = [f64; 4];
 
 /// How boxes move between frames.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum Motion {
-    /// Random walk of centre and size (the seed's model); velocities stay 0.
+    /// Random walk of centre and size (Yoon et al. 2016's model); velocities stay 0.
     RandomWalk {
         /// Standard deviation of the centre's step per frame (pixels).
         position_std: f64,
@@ -33,9 +35,9 @@ pub enum Motion {
     },
 }
 
-/// Parameters of the PHD filters. Defaults follow seed 004 where it gives values (p_D = 0.95,
-/// birth intensity 0.1, extraction threshold 0.5) and are otherwise sized for pedestrians of
-/// 50-150 pixels in a 640 × 480 image.
+/// Parameters of the PHD filters. Defaults follow Yoon, Hwang, Choi & Yoon (2016) where the
+/// paper gives values (p_D = 0.95, birth intensity 0.1, extraction threshold 0.5) and are
+/// otherwise sized for pedestrians of 50-150 pixels in a 640 × 480 image.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct PhdConfig {
@@ -98,7 +100,7 @@ impl PhdConfig {
     /// without a configuration file): noise and motion follow the median box width w and
     /// height h (measurement σ = [0.1 w, 0.05 h, 0.1 w, 0.05 h], a random walk of 0.1 w in
     /// position and 0.02 h in size per frame), clutter is uniform over the range of centres
-    /// and sizes, p_D = 0.8 (public detectors miss far more than Feng et al.'s 5 %; a lower
+    /// and sizes, p_D = 0.8 (public detectors miss far more than Yoon et al.'s 5 %; a lower
     /// p_D keeps a track through a missed detection), 300 particles per target and 100 per
     /// newborn group.
     ///
@@ -113,9 +115,7 @@ impl PhdConfig {
     /// ```
     pub fn for_boxes(boxes: &[BoundingBox]) -> Result<Self> {
         if boxes.is_empty() {
-            return Err(Error::Invalid(
-                "a configuration scaled to boxes needs at least one box".into(),
-            ));
+            return Err(Error::NoBoxes);
         }
         let median = |f: fn(&BoundingBox) -> f64| {
             let mut v: Vec<f64> = boxes.iter().map(f).collect();
@@ -178,16 +178,20 @@ impl PhdConfig {
             }
         }
         ensure_positive(self.birth_velocity_std, "birth_velocity_std")?;
-        if self.particles_per_target == 0 || self.birth_particles == 0 || self.max_particles == 0 {
-            return Err(Error::Invalid("particle counts must be > 0".into()));
+        for (name, count) in [
+            ("particles_per_target", self.particles_per_target),
+            ("birth_particles", self.birth_particles),
+            ("max_particles", self.max_particles),
+        ] {
+            if count == 0 {
+                return Err(Error::InvalidParameter {
+                    name,
+                    reason: "0 particles; it must be at least 1".into(),
+                });
+            }
         }
         ensure_positive(self.extraction_threshold, "extraction_threshold")?;
-        if !(0.0..=1.0).contains(&self.label_min_share) {
-            return Err(Error::Invalid(format!(
-                "label_min_share is {}; it must lie in [0, 1]",
-                self.label_min_share
-            )));
-        }
+        ensure_in_range(self.label_min_share, 0.0, 1.0, "label_min_share")?;
         Ok(())
     }
 
@@ -236,7 +240,7 @@ impl Likelihood {
         let log_det: f64 = std.iter().map(|s| 2.0 * s.ln()).sum();
         Self {
             inv_var,
-            log_norm: -2.0 * std::f64::consts::TAU.ln() - 0.5 * log_det,
+            log_norm: -2.0 * LN_2PI - 0.5 * log_det,
             cutoff: 50.0,
         }
     }

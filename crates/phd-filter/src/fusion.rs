@@ -1,4 +1,4 @@
-//! Seed 004's detector fusion and local-detector management.
+//! The detector fusion and local-detector management of Yoon, Hwang, Choi & Yoon (2016).
 //!
 //! * Eqs. 1-2: a local and a global detection overlapping with IoU above the threshold are
 //!   averaged into one fused observation; the filter sees Z = Z_F ∪ unmatched Z_G ∪ unmatched
@@ -14,7 +14,7 @@ use tracker_model::{BoundingBox, Frame, LocalDetector, ensure_in_range, ensure_o
 use crate::config::measurement_from_box;
 use crate::error::Result;
 
-/// Parameters of fusion and local-detector management; defaults are the seed's.
+/// Parameters of fusion and local-detector management; defaults are Yoon et al. 2016's.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct FusionConfig {
@@ -26,14 +26,14 @@ pub struct FusionConfig {
     /// overlaps its box with IoU at least this (0.5).
     pub confirm_iou: f64,
     /// p_D of eqs. 9-10: how often the global detector finds a person a local detector
-    /// really follows. The seed gives no values for eqs. 9-10; with its filter's p_D = 0.95
+    /// really follows. Yoon et al. give no values for eqs. 9-10; with their filter's p_D = 0.95
     /// and p_FA = 0.3, one missed global detection would take a new detector from 0.5 to
     /// 0.07 and remove it, so the default is the global detector's own rate.
     pub p_detect: f64,
     /// p_FA of eqs. 9-10: how often a global box overlaps a local detector that follows
     /// nothing real.
     pub p_false_alarm: f64,
-    /// Confidence a new local detector starts with. The seed writes P₀ = 0, which Bayes' rule
+    /// Confidence a new local detector starts with. Yoon et al. write P₀ = 0, which Bayes' rule
     /// can never move; we start undecided.
     pub initial_confidence: f64,
     /// A detector is removed when its confidence is at or below this (0.1).

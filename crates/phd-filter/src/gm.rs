@@ -7,7 +7,7 @@
 
 use nalgebra::{Cholesky, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
-use tracker_model::BoundingBox;
+use tracker_model::{BoundingBox, LN_2PI, ensure_non_negative};
 
 use crate::config::{Motion, PhdConfig, measurement_from_box, state_box};
 use crate::error::{Error, Result};
@@ -15,6 +15,7 @@ use crate::smc::{Estimate, PhdStep};
 
 type Vec6 = SVector<f64, 6>;
 type Mat6 = SMatrix<f64, 6, 6>;
+type Vec4 = SVector<f64, 4>;
 type Mat4 = SMatrix<f64, 4, 4>;
 type Mat64 = SMatrix<f64, 6, 4>;
 
@@ -28,6 +29,21 @@ pub struct GmConfig {
     pub merge_distance: f64,
     /// At most this many components are kept (J_max).
     pub max_components: usize,
+}
+
+impl GmConfig {
+    /// Checks every field; [`GmPhd::new`] calls it.
+    pub fn check(&self) -> Result<()> {
+        ensure_non_negative(self.prune_below, "prune_below")?;
+        ensure_non_negative(self.merge_distance, "merge_distance")?;
+        if self.max_components == 0 {
+            return Err(Error::InvalidParameter {
+                name: "max_components",
+                reason: "0; the mixture must keep at least one component".into(),
+            });
+        }
+        Ok(())
+    }
 }
 
 impl Default for GmConfig {
@@ -66,8 +82,6 @@ pub struct GmPhd {
     next_label: u64,
 }
 
-const LN_2PI: f64 = 1.837_877_066_409_345_3;
-
 /// Squared Mahalanobis distance beyond which a (component, measurement) pair is ignored.
 const GATE: f64 = 50.0;
 
@@ -77,6 +91,17 @@ struct Innovation {
     log_norm: f64,
     gain: Mat64,
     cov: Mat6,
+}
+
+/// A gated (component, measurement) pair of one measurement: the component's index,
+/// q = p_D w N(z; H m, S) and the residual z − H m.
+type GatedPair = (usize, f64, Vec4);
+
+/// log N(z; H m, S) of a component for a measurement, and the residual z − H m.
+fn log_density(c: &Component, inn: &Innovation, z: &Vec4) -> (f64, Vec4) {
+    let residual = z - c.m.fixed_rows::<4>(0);
+    let maha = residual.dot(&inn.factor.solve(&residual));
+    (inn.log_norm - 0.5 * maha, residual)
 }
 
 fn innovation(c: &Component, r: &Mat4) -> Result<Innovation> {
@@ -102,9 +127,7 @@ impl GmPhd {
     /// A filter with no targets.
     pub fn new(config: PhdConfig, gm: GmConfig) -> Result<Self> {
         config.check()?;
-        if !(gm.prune_below >= 0.0 && gm.merge_distance >= 0.0 && gm.max_components > 0) {
-            return Err(Error::Invalid(format!("bad mixture settings {gm:?}")));
-        }
+        gm.check()?;
         let mut f = Mat6::identity();
         let mut q = Mat6::zeros();
         let mut birth_cov = Mat6::zeros();
@@ -139,9 +162,7 @@ impl GmPhd {
             }
         }
         Ok(Self {
-            r: Mat4::from_diagonal(&SVector::<f64, 4>::from(
-                config.measurement_std.map(|s| s * s),
-            )),
+            r: Mat4::from_diagonal(&Vec4::from(config.measurement_std.map(|s| s * s))),
             config,
             gm,
             f,
@@ -157,22 +178,17 @@ impl GmPhd {
         &self.components
     }
 
-    /// Runs one frame with the given detections.
+    /// Runs one frame with the given detections: predict, add the newborns, update, reduce,
+    /// extract the estimates, and reduce again with the updated newborns.
     pub fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
-        let zs: Vec<(usize, SVector<f64, 4>)> = boxes
+        let zs: Vec<(usize, Vec4)> = boxes
             .iter()
             .enumerate()
             .filter_map(|(i, b)| measurement_from_box(b).map(|z| (i, SVector::from(z))))
             .collect();
         let skipped = boxes.len() - zs.len();
         let cfg = self.config;
-        let p_d = cfg.p_detect;
-        // Predict.
-        for c in &mut self.components {
-            c.w *= cfg.p_survive;
-            c.m = self.f * c.m;
-            c.p = self.f * c.p * self.f.transpose() + self.q;
-        }
+        self.predict();
         let innovations = self
             .components
             .iter()
@@ -183,8 +199,48 @@ impl GmPhd {
         } else {
             cfg.birth_rate / zs.len() as f64
         };
-        let kappa = cfg.clutter_intensity();
-        // Newborns: one component per measurement, at the measurement.
+        let newborn = self.spawn_newborn(&zs, nu);
+        let newborn_innovations = newborn
+            .iter()
+            .map(|c| innovation(c, &self.r))
+            .collect::<Result<Vec<_>>>()?;
+        let per_z = self.gate(&zs, &innovations);
+        let (detected, updated_newborn) = self.update(
+            &zs,
+            &per_z,
+            &innovations,
+            &newborn,
+            &newborn_innovations,
+            nu,
+        );
+        for c in &mut self.components {
+            c.w *= 1.0 - cfg.p_detect;
+        }
+        self.components.extend(detected);
+        let expected_targets: f64 = self.components.iter().map(|c| c.w).sum();
+        self.reduce()?;
+        let estimates = self.extract();
+        self.components.extend(updated_newborn);
+        self.reduce()?;
+        Ok(PhdStep {
+            estimates,
+            expected_targets,
+            skipped,
+        })
+    }
+
+    /// Predict: every component moves by F, gains Q and is weighted by p_S.
+    fn predict(&mut self) {
+        for c in &mut self.components {
+            c.w *= self.config.p_survive;
+            c.m = self.f * c.m;
+            c.p = self.f * c.p * self.f.transpose() + self.q;
+        }
+    }
+
+    /// Newborns: one component per measurement, at the measurement, of weight `nu` and with a
+    /// fresh label.
+    fn spawn_newborn(&mut self, zs: &[(usize, Vec4)], nu: f64) -> Vec<Component> {
         let newborn: Vec<Component> = zs
             .iter()
             .enumerate()
@@ -200,21 +256,15 @@ impl GmPhd {
             })
             .collect();
         self.next_label += zs.len() as u64;
-        let newborn_innovations = newborn
-            .iter()
-            .map(|c| innovation(c, &self.r))
-            .collect::<Result<Vec<_>>>()?;
-        // log N(z; H m, S) for every (component, measurement) pair.
-        let log_density = |c: &Component, inn: &Innovation, z: &SVector<f64, 4>| {
-            let residual = z - c.m.fixed_rows::<4>(0);
-            let maha = residual.dot(&inn.factor.solve(&residual));
-            (inn.log_norm - 0.5 * maha, residual)
-        };
-        let mut detected: Vec<Component> = Vec::new();
-        let mut updated_newborn: Vec<Component> = Vec::with_capacity(newborn.len());
-        let mut per_z: Vec<Vec<(usize, f64, SVector<f64, 4>)>> = vec![Vec::new(); zs.len()];
+        newborn
+    }
+
+    /// The (component, measurement) pairs within the gate, per measurement.
+    fn gate(&self, zs: &[(usize, Vec4)], innovations: &[Innovation]) -> Vec<Vec<GatedPair>> {
+        let p_d = self.config.p_detect;
+        let mut per_z: Vec<Vec<GatedPair>> = vec![Vec::new(); zs.len()];
         for (j, (_, z)) in zs.iter().enumerate() {
-            for (i, (c, inn)) in self.components.iter().zip(&innovations).enumerate() {
+            for (i, (c, inn)) in self.components.iter().zip(innovations).enumerate() {
                 let (ld, residual) = log_density(c, inn, z);
                 // Pairs beyond the gate (the SMC likelihood's cut-off, χ² = 50) would only
                 // add components that pruning removes.
@@ -227,6 +277,23 @@ impl GmPhd {
                 }
             }
         }
+        per_z
+    }
+
+    /// The update: per measurement, L(z) = κ + ν N(z; newborn) + Σ q, the detection-updated
+    /// components (weights q / L) and the updated newborn. Returns both lists.
+    fn update(
+        &self,
+        zs: &[(usize, Vec4)],
+        per_z: &[Vec<GatedPair>],
+        innovations: &[Innovation],
+        newborn: &[Component],
+        newborn_innovations: &[Innovation],
+        nu: f64,
+    ) -> (Vec<Component>, Vec<Component>) {
+        let kappa = self.config.clutter_intensity();
+        let mut detected: Vec<Component> = Vec::new();
+        let mut updated_newborn: Vec<Component> = Vec::with_capacity(newborn.len());
         for (j, (_, z)) in zs.iter().enumerate() {
             let (nb_ld, nb_residual) = log_density(&newborn[j], &newborn_innovations[j], z);
             let birth_term = nu * nb_ld.exp();
@@ -249,15 +316,13 @@ impl GmPhd {
                 label: newborn[j].label,
             });
         }
-        for c in &mut self.components {
-            c.w *= 1.0 - p_d;
-        }
-        self.components.extend(detected);
-        let expected_targets: f64 = self.components.iter().map(|c| c.w).sum();
-        self.reduce()?;
-        // Extraction, heaviest first; a label already used goes to a new identity.
+        (detected, updated_newborn)
+    }
+
+    /// Extraction, heaviest first; a label already used goes to a new identity.
+    fn extract(&mut self) -> Vec<Estimate> {
         let mut order: Vec<usize> = (0..self.components.len())
-            .filter(|&i| self.components[i].w > cfg.extraction_threshold)
+            .filter(|&i| self.components[i].w > self.config.extraction_threshold)
             .collect();
         order.sort_by(|&a, &b| {
             self.components[b]
@@ -283,13 +348,7 @@ impl GmPhd {
                 measurement: None,
             });
         }
-        self.components.extend(updated_newborn);
-        self.reduce()?;
-        Ok(PhdStep {
-            estimates,
-            expected_targets,
-            skipped,
-        })
+        estimates
     }
 
     /// Pruning, merging and capping: components are visited by decreasing weight; each one not

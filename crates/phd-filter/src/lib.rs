@@ -1,17 +1,48 @@
 //! # phd-filter
 //!
-//! Probability hypothesis density filters for boxes, and seed 004's fusion of a global
-//! detector with online local detectors:
+//! Probability hypothesis density filters for boxes, and the fusion of a global detector with
+//! online local detectors of Yoon, Hwang, Choi & Yoon (2016):
 //!
 //! * [`SmcPhd`]: the SMC-PHD filter (Vo, Singh & Doucet 2005) with measurement-driven birth and
 //!   grouping extraction (Ristic et al. 2012), persistent identities, rayon-parallel and
 //!   reproducible for a seed whatever the thread count;
 //! * [`GmPhd`]: the Gaussian-mixture PHD filter (Vo & Ma 2006) with pruning, merging, capping;
-//! * [`fuse`], [`updated_confidence`], [`DetectorBank`]: eqs. 1-2 and 9-10 of the seed;
-//! * [`PhdTracker`]: the seed's loop (local detections, fusion, filter, detector management);
+//! * [`fuse`], [`updated_confidence`], [`DetectorBank`]: eqs. 1-2 and 9-10 of Yoon et al.;
+//! * [`PhdTracker`]: their loop (local detections, fusion, filter, detector management), or
+//!   the filter alone on the global detections ([`PhdTracker::global_only`]);
 //! * [`scene`]: simulated pedestrian scenes with a global detector that misses and fires
 //!   falsely, and local detectors with their own failures, behind
 //!   [`tracker_model::LocalDetector`].
+//!
+//! Configurations are checked when a filter or tracker is built ([`PhdConfig::check`],
+//! [`GmConfig::check`], [`FusionConfig::check`]) and trusted afterwards.
+//!
+//! Two people standing apart, detected in every frame, become two tracks:
+//!
+//! ```
+//! use phd_filter::{PhdConfig, PhdTracker, SmcPhd};
+//! use tracker_model::BoundingBox;
+//!
+//! // Each frame's detections as [left, top, width, height] in pixels: one person walks right,
+//! // the other left.
+//! let frames: Vec<Vec<[f64; 4]>> = (0..8)
+//!     .map(|t| {
+//!         let dx = 2.0 * f64::from(t);
+//!         vec![[100.0 + dx, 200.0, 40.0, 100.0], [400.0 - dx, 180.0, 45.0, 110.0]]
+//!     })
+//!     .collect();
+//! let mut tracker = PhdTracker::global_only(SmcPhd::new(PhdConfig::default(), 7)?);
+//! for (frame, detections) in (0..).zip(&frames) {
+//!     let boxes = detections
+//!         .iter()
+//!         .map(|&[left, top, width, height]| BoundingBox::new(left, top, width, height))
+//!         .collect::<Result<Vec<_>, _>>()?;
+//!     tracker.step(frame, &boxes)?;
+//! }
+//! let tracks = tracker.tracks()?;
+//! assert_eq!(tracks.len(), 2);
+//! # Ok::<(), phd_filter::Error>(())
+//! ```
 
 mod config;
 mod error;

@@ -1,4 +1,4 @@
-//! Simulated pedestrian scenes for the seed's experiment: people walking across a sidewalk
+//! Simulated pedestrian scenes for Yoon et al. 2016's experiment: people walking across a sidewalk
 //! seen in perspective (nearer people are lower in the image and larger, and hide those
 //! behind them), a global detector that misses people (more often when they are occluded) and
 //! fires falsely, and local detectors that follow one person each with their own failures:
@@ -13,6 +13,7 @@ use rand_distr::{Distribution, Poisson, StandardNormal};
 use serde::{Deserialize, Serialize};
 use tracker_model::{
     BoundingBox, Frame, LocalDetector, LocalDetectorFactory, Track, TrackId, TrackPoint, TrackSet,
+    ensure_in_range, ensure_non_negative, ensure_positive,
 };
 
 use crate::error::{Error, Result};
@@ -66,24 +67,31 @@ impl SceneConfig {
         }
     }
 
-    fn check(&self) -> Result<()> {
-        let ok = self.image.iter().all(|v| *v > 0.0)
-            && self.speed[0] >= 0.0
-            && self.speed[1] >= self.speed[0]
-            && self.ground_rows[1] > self.ground_rows[0]
-            && self.heights.iter().all(|h| *h > 0.0)
-            && (0.0..=1.0).contains(&self.p_detect)
-            && (0.0..=1.0).contains(&self.p_detect_occluded)
-            && self.false_positives >= 0.0
-            && self.arrivals_per_frame >= 0.0
-            && self.box_noise >= 0.0;
-        if ok {
-            Ok(())
-        } else {
-            Err(Error::Invalid(format!(
-                "scene settings out of range: {self:?}"
-            )))
+    /// Checks every field; [`SceneConfig::simulate`] calls it.
+    pub fn check(&self) -> Result<()> {
+        for v in self.image {
+            ensure_positive(v, "image")?;
         }
+        ensure_non_negative(self.speed[0], "speed")?;
+        ensure_in_range(self.speed[1], self.speed[0], f64::INFINITY, "speed")?;
+        let [far, near] = self.ground_rows;
+        if !(far.is_finite() && near.is_finite() && near > far) {
+            return Err(Error::InvalidParameter {
+                name: "ground_rows",
+                reason: format!(
+                    "[{far}, {near}]: the near row must be finite and below the far one"
+                ),
+            });
+        }
+        for h in self.heights {
+            ensure_positive(h, "heights")?;
+        }
+        ensure_in_range(self.p_detect, 0.0, 1.0, "p_detect")?;
+        ensure_in_range(self.p_detect_occluded, 0.0, 1.0, "p_detect_occluded")?;
+        ensure_non_negative(self.false_positives, "false_positives")?;
+        ensure_non_negative(self.arrivals_per_frame, "arrivals_per_frame")?;
+        ensure_non_negative(self.box_noise, "box_noise")?;
+        Ok(())
     }
 }
 
@@ -168,13 +176,91 @@ impl SceneConfig {
         }
     }
 
+    /// One frame of walking: every walker moves, those who left the image go, and newcomers
+    /// arrive at the edges.
+    fn walk<R: Rng + ?Sized>(
+        &self,
+        walkers: &mut Vec<Walker>,
+        next_id: &mut u64,
+        arrivals: &Poisson<f64>,
+        rng: &mut R,
+    ) {
+        for w in walkers.iter_mut() {
+            w.x += w.vx;
+            w.vy = 0.8 * w.vy + 0.05 * normal(rng);
+            w.foot = (w.foot + w.vy).clamp(self.ground_rows[0], self.ground_rows[1]);
+            w.vx += 0.02 * normal(rng);
+        }
+        walkers.retain(|w| {
+            let b = self.walker_box(w);
+            b.right() > 0.0 && b.left < self.image[0]
+        });
+        for _ in 0..arrivals.sample(rng) as u64 {
+            *next_id += 1;
+            walkers.push(self.spawn(*next_id - 1, false, rng));
+        }
+    }
+
+    /// One frame seen: each walker's box and hidden fraction, and the global detector's boxes
+    /// (the people it finds, then its false boxes).
+    fn observe<R: Rng + ?Sized>(
+        &self,
+        walkers: &[Walker],
+        false_positives: &Poisson<f64>,
+        rng: &mut R,
+    ) -> (FrameTruth, Vec<BoundingBox>) {
+        let boxes: Vec<BoundingBox> = walkers.iter().map(|w| self.walker_box(w)).collect();
+        let mut truth: FrameTruth = Vec::with_capacity(walkers.len());
+        let mut found = Vec::new();
+        for (w, b) in walkers.iter().zip(&boxes) {
+            // Hidden fraction: the largest share of this box covered by one nearer person.
+            let hidden = walkers
+                .iter()
+                .zip(&boxes)
+                .filter(|(o, _)| o.foot > w.foot)
+                .map(|(_, ob)| b.intersection_area(ob) / b.area())
+                .fold(0.0, f64::max);
+            truth.push((w.id, *b, hidden));
+            let p = if hidden > 0.5 {
+                self.p_detect_occluded
+            } else {
+                self.p_detect
+            };
+            if rng.random_bool(p) {
+                let s = self.box_noise * b.height;
+                found.push(BoundingBox {
+                    left: b.left + s * normal(rng),
+                    top: b.top + s * normal(rng),
+                    width: (b.width + s * normal(rng)).max(2.0),
+                    height: (b.height + s * normal(rng)).max(4.0),
+                });
+            }
+        }
+        for _ in 0..false_positives.sample(rng) as u64 {
+            let foot = rng.random_range(self.ground_rows[0]..self.ground_rows[1]);
+            let h = self.height_at(foot) * rng.random_range(0.7..1.3);
+            let x = rng.random_range(0.0..self.image[0]);
+            found.push(BoundingBox {
+                left: x - 0.2 * h,
+                top: foot - h,
+                width: 0.4 * h,
+                height: h,
+            });
+        }
+        (truth, found)
+    }
+
     /// Draws a scene; every random draw comes from `rng`.
     pub fn simulate<R: Rng + ?Sized>(&self, rng: &mut R) -> Result<Scene> {
         self.check()?;
-        let arrivals = Poisson::new(self.arrivals_per_frame.max(1e-12))
-            .map_err(|e| Error::Invalid(e.to_string()))?;
-        let false_positives = Poisson::new(self.false_positives.max(1e-12))
-            .map_err(|e| Error::Invalid(e.to_string()))?;
+        let poisson = |rate: f64, name: &'static str| {
+            Poisson::new(rate.max(1e-12)).map_err(|e| Error::InvalidParameter {
+                name,
+                reason: format!("{rate}: {e}"),
+            })
+        };
+        let arrivals = poisson(self.arrivals_per_frame, "arrivals_per_frame")?;
+        let false_positives = poisson(self.false_positives, "false_positives")?;
         let mut next_id = 0;
         let mut walkers: Vec<Walker> = (0..self.initial_people)
             .map(|_| {
@@ -187,62 +273,14 @@ impl SceneConfig {
         let mut detections = Vec::with_capacity(self.n_frames as usize);
         for frame in 0..self.n_frames {
             if frame > 0 {
-                for w in &mut walkers {
-                    w.x += w.vx;
-                    w.vy = 0.8 * w.vy + 0.05 * normal(rng);
-                    w.foot = (w.foot + w.vy).clamp(self.ground_rows[0], self.ground_rows[1]);
-                    w.vx += 0.02 * normal(rng);
-                }
-                walkers.retain(|w| {
-                    let b = self.walker_box(w);
-                    b.right() > 0.0 && b.left < self.image[0]
-                });
-                for _ in 0..arrivals.sample(rng) as u64 {
-                    next_id += 1;
-                    walkers.push(self.spawn(next_id - 1, false, rng));
-                }
+                self.walk(&mut walkers, &mut next_id, &arrivals, rng);
             }
-            let boxes: Vec<BoundingBox> = walkers.iter().map(|w| self.walker_box(w)).collect();
-            let mut truth: FrameTruth = Vec::with_capacity(walkers.len());
-            let mut found = Vec::new();
-            for (w, b) in walkers.iter().zip(&boxes) {
-                // Hidden fraction: the largest share of this box covered by one nearer person.
-                let hidden = walkers
-                    .iter()
-                    .zip(&boxes)
-                    .filter(|(o, _)| o.foot > w.foot)
-                    .map(|(_, ob)| b.intersection_area(ob) / b.area())
-                    .fold(0.0, f64::max);
-                truth.push((w.id, *b, hidden));
+            let (truth, found) = self.observe(&walkers, &false_positives, rng);
+            for (id, b, _) in &truth {
                 points
-                    .entry(w.id)
+                    .entry(*id)
                     .or_default()
                     .push(TrackPoint::boxed(frame, *b));
-                let p = if hidden > 0.5 {
-                    self.p_detect_occluded
-                } else {
-                    self.p_detect
-                };
-                if rng.random_bool(p) {
-                    let s = self.box_noise * b.height;
-                    found.push(BoundingBox {
-                        left: b.left + s * normal(rng),
-                        top: b.top + s * normal(rng),
-                        width: (b.width + s * normal(rng)).max(2.0),
-                        height: (b.height + s * normal(rng)).max(4.0),
-                    });
-                }
-            }
-            for _ in 0..false_positives.sample(rng) as u64 {
-                let foot = rng.random_range(self.ground_rows[0]..self.ground_rows[1]);
-                let h = self.height_at(foot) * rng.random_range(0.7..1.3);
-                let x = rng.random_range(0.0..self.image[0]);
-                found.push(BoundingBox {
-                    left: x - 0.2 * h,
-                    top: foot - h,
-                    width: 0.4 * h,
-                    height: h,
-                });
             }
             by_frame.insert(frame, truth);
             detections.push(found);
@@ -276,6 +314,28 @@ pub struct LocalDetectorSim {
     pub p_relock: f64,
 }
 
+impl LocalDetectorSim {
+    /// Checks every field; [`SimulatedDetectors::new`] calls it.
+    pub fn check(&self) -> Result<()> {
+        ensure_non_negative(self.noise, "noise")?;
+        ensure_non_negative(self.drift, "drift")?;
+        ensure_in_range(self.occlusion, 0.0, 1.0, "occlusion")?;
+        ensure_in_range(self.p_lost, 0.0, 1.0, "p_lost")?;
+        ensure_in_range(self.p_relock, 0.0, 1.0, "p_relock")?;
+        if self.p_lost + self.p_relock > 1.0 {
+            return Err(Error::InvalidParameter {
+                name: "p_lost",
+                reason: format!(
+                    "{} with p_relock {}: the two outcomes of an occluded frame cannot exceed 1 \
+                     together",
+                    self.p_lost, self.p_relock
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
 impl Default for LocalDetectorSim {
     fn default() -> Self {
         Self {
@@ -298,13 +358,14 @@ pub struct SimulatedDetectors {
 
 impl SimulatedDetectors {
     /// A factory over `scene`'s truth; detector i draws from ChaCha8(`seed`) stream i.
-    pub fn new(scene: &Scene, config: LocalDetectorSim, seed: u64) -> Self {
-        Self {
+    pub fn new(scene: &Scene, config: LocalDetectorSim, seed: u64) -> Result<Self> {
+        config.check()?;
+        Ok(Self {
             truth: Arc::clone(&scene.by_frame),
             config,
             seed,
             spawned: 0,
-        }
+        })
     }
 }
 

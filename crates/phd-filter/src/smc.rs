@@ -1,5 +1,5 @@
-//! The SMC-PHD filter (Vo, Singh & Doucet 2005; seed 004 eqs. 3-8) with measurement-driven
-//! birth and grouping extraction (Ristic, Clark, Vo & Vo 2012).
+//! The SMC-PHD filter (Vo, Singh & Doucet 2005; Yoon, Hwang, Choi & Yoon 2016 eqs. 3-8) with
+//! measurement-driven birth and grouping extraction (Ristic, Clark, Vo & Vo 2012).
 //!
 //! Persistent particles are predicted, weighted by survival, and updated with
 //! w ← [1 − p_D + Σ_z p_D g(z|x) / L(z)] w, where L(z) = κ(z) + ν_b(z) ḡ_b(z) + Σ_i p_D g(z|x_i) w_i.
@@ -147,6 +147,16 @@ impl SortedByX {
 /// measurement Σ p_D g w.
 type ChunkDensities = (Vec<(u32, u32, f64)>, Vec<f64>);
 
+/// The likelihoods of one frame and the normalisers L(z) they give.
+struct Likelihoods {
+    /// Per chunk of persistent particles: the non-zero g(z|x_i) and Σ p_D g w per z.
+    persistent: Vec<ChunkDensities>,
+    /// g(z|x) of each newborn group's particles under its own measurement.
+    newborn: Vec<Vec<f64>>,
+    /// L(z) per measurement.
+    normaliser: Vec<f64>,
+}
+
 /// Per-measurement sums of one chunk of persistent particles.
 #[derive(Clone, Default)]
 struct Grouping {
@@ -180,7 +190,8 @@ impl SmcPhd {
         &self.particles
     }
 
-    /// Runs one frame with the given detections.
+    /// Runs one frame with the given detections: predict, draw the newborn groups, compute
+    /// L(z), update, extract the estimates (eq. 8) and resample.
     pub fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
         let valid: Vec<(usize, BoxMeasurement)> = boxes
             .iter()
@@ -189,11 +200,28 @@ impl SmcPhd {
             .collect();
         let skipped = boxes.len() - valid.len();
         let zs: Vec<BoxMeasurement> = valid.iter().map(|v| v.1).collect();
-        let cfg = self.config;
-        let lik = self.likelihood;
-        let p_d = cfg.p_detect;
+        self.predict();
+        let nu = if zs.is_empty() {
+            0.0
+        } else {
+            self.config.birth_rate / zs.len() as f64
+        };
+        let newborn = self.spawn_newborn(&zs, nu);
+        let likelihoods = self.likelihoods(&zs, nu, &newborn);
+        let groups = self.update(&likelihoods);
+        let expected_targets: f64 = self.particles.iter().map(|p| p.w).sum();
+        let estimates = self.extract(groups, &valid);
+        self.resample_particles(expected_targets, newborn, &likelihoods);
+        Ok(PhdStep {
+            estimates,
+            expected_targets,
+            skipped,
+        })
+    }
 
-        // Predict.
+    /// Predict: moves every persistent particle and weights it by p_S.
+    fn predict(&mut self) {
+        let cfg = self.config;
         let seed: u64 = self.rng.random();
         self.particles
             .par_chunks_mut(CHUNK)
@@ -205,18 +233,16 @@ impl SmcPhd {
                     p.w *= cfg.p_survive;
                 }
             });
+    }
 
-        // Newborn groups, one per measurement, drawn around it.
+    /// Newborn groups, one per measurement, drawn around it, each of total weight `nu` and
+    /// with a fresh label.
+    fn spawn_newborn(&mut self, zs: &[BoxMeasurement], nu: f64) -> Vec<Vec<Particle>> {
+        let cfg = self.config;
         let birth_seed: u64 = self.rng.random();
-        let nu = if zs.is_empty() {
-            0.0
-        } else {
-            cfg.birth_rate / zs.len() as f64
-        };
         let first_label = self.next_label;
         self.next_label += zs.len() as u64;
-        let newborn: Vec<Vec<Particle>> = zs
-            .par_iter()
+        zs.par_iter()
             .enumerate()
             .map(|(j, z)| {
                 let mut rng = stream_rng(birth_seed, j);
@@ -240,14 +266,24 @@ impl SmcPhd {
                     })
                     .collect()
             })
-            .collect();
+            .collect()
+    }
 
-        // L(z) = κ + ν_b(z) ḡ_b(z) + Σ_i p_D g(z|x_i) w_i.
+    /// L(z) = κ + ν_b(z) ḡ_b(z) + Σ_i p_D g(z|x_i) w_i, with the likelihoods it is made of.
+    fn likelihoods(
+        &self,
+        zs: &[BoxMeasurement],
+        nu: f64,
+        newborn: &[Vec<Particle>],
+    ) -> Likelihoods {
+        let cfg = self.config;
+        let lik = self.likelihood;
+        let p_d = cfg.p_detect;
         let n_z = zs.len();
-        let sorted = SortedByX::new(&zs, lik.reach_x());
+        let sorted = SortedByX::new(zs, lik.reach_x());
         // One pass computes every non-zero g(z|x_i) once, per chunk as (particle, z, g), and
         // the chunk's sums; the update pass reuses them.
-        let densities: Vec<ChunkDensities> = self
+        let persistent: Vec<ChunkDensities> = self
             .particles
             .par_chunks(CHUNK)
             .map(|chunk| {
@@ -266,30 +302,39 @@ impl SmcPhd {
             })
             .collect();
         let mut persistent_sum = vec![0.0; n_z];
-        for (_, sums) in &densities {
+        for (_, sums) in &persistent {
             persistent_sum
                 .iter_mut()
                 .zip(sums)
                 .for_each(|(a, b)| *a += b);
         }
         let kappa = cfg.clutter_intensity();
-        let newborn_g: Vec<Vec<f64>> = newborn
+        let newborn: Vec<Vec<f64>> = newborn
             .par_iter()
-            .zip(&zs)
+            .zip(zs)
             .map(|(group, z)| group.iter().map(|p| lik.density(z, &p.x)).collect())
             .collect();
-        let big_l: Vec<f64> = (0..n_z)
+        let normaliser: Vec<f64> = (0..n_z)
             .map(|j| {
-                let mean_g = newborn_g[j].iter().sum::<f64>() / newborn_g[j].len().max(1) as f64;
+                let mean_g = newborn[j].iter().sum::<f64>() / newborn[j].len().max(1) as f64;
                 kappa + nu * mean_g + persistent_sum[j]
             })
             .collect();
+        Likelihoods {
+            persistent,
+            newborn,
+            normaliser,
+        }
+    }
 
-        // Update persistent particles and accumulate the grouping sums.
-        let groups: Vec<Grouping> = self
-            .particles
+    /// Updates the persistent particles and accumulates the grouping sums, per chunk.
+    fn update(&mut self, likelihoods: &Likelihoods) -> Vec<Grouping> {
+        let p_d = self.config.p_detect;
+        let big_l = &likelihoods.normaliser;
+        let n_z = big_l.len();
+        self.particles
             .par_chunks_mut(CHUNK)
-            .zip(&densities)
+            .zip(&likelihoods.persistent)
             .map(|(chunk, (pairs, _))| {
                 let mut g = Grouping {
                     mass: vec![0.0; n_z],
@@ -318,10 +363,17 @@ impl SmcPhd {
                 }
                 g
             })
-            .collect();
-        let expected_targets: f64 = self.particles.iter().map(|p| p.w).sum();
+            .collect()
+    }
 
-        // Grouping extraction (eq. 8), larger W first so a contested label goes to it.
+    /// Grouping extraction (eq. 8), larger W first so a contested label goes to it.
+    fn extract(
+        &mut self,
+        groups: Vec<Grouping>,
+        valid: &[(usize, BoxMeasurement)],
+    ) -> Vec<Estimate> {
+        let cfg = self.config;
+        let n_z = valid.len();
         let mut mass = vec![0.0; n_z];
         let mut mean = vec![[0.0; 6]; n_z];
         let mut labels: Vec<BTreeMap<u64, f64>> = vec![BTreeMap::new(); n_z];
@@ -366,13 +418,26 @@ impl SmcPhd {
                 measurement: Some(valid[j].0),
             });
         }
+        estimates
+    }
 
-        // Resample the persistent particles to ρ N̂; each newborn group, updated by its own
-        // measurement only, is resampled to J_b particles and joins them (Ristic et al.).
+    /// Resamples the persistent particles to ρ N̂; each newborn group, updated by its own
+    /// measurement only, is resampled to J_b particles and joins them (Ristic et al. 2012).
+    fn resample_particles(
+        &mut self,
+        expected_targets: f64,
+        newborn: Vec<Vec<Particle>>,
+        likelihoods: &Likelihoods,
+    ) {
+        let cfg = self.config;
         let persistent = std::mem::take(&mut self.particles);
         let target = (expected_targets * cfg.particles_per_target as f64).ceil() as usize;
         self.particles = resample(&persistent, target.min(cfg.max_particles), &mut self.rng);
-        for ((group, g), l) in newborn.into_iter().zip(&newborn_g).zip(&big_l) {
+        for ((group, g), l) in newborn
+            .into_iter()
+            .zip(&likelihoods.newborn)
+            .zip(&likelihoods.normaliser)
+        {
             let weighted: Vec<Particle> = group
                 .into_iter()
                 .zip(g)
@@ -384,11 +449,6 @@ impl SmcPhd {
             let kept = resample(&weighted, cfg.birth_particles, &mut self.rng);
             self.particles.extend(kept);
         }
-        Ok(PhdStep {
-            estimates,
-            expected_targets,
-            skipped,
-        })
     }
 }
 

@@ -160,7 +160,7 @@ fn confidence_follows_eqs_9_and_10() {
     // p_D = 0.7, p_FA = 0.1 from P = 0.5: eq. 9 gives 0.35 / 0.40, eq. 10 gives 0.15 / 0.60.
     assert!((updated_confidence(0.5, true, &config) - 0.875).abs() < 1e-15);
     assert!((updated_confidence(0.5, false, &config) - 0.25).abs() < 1e-15);
-    // The seed's p_D = 0.95 with p_FA = 0.3: one miss takes 0.5 to 0.025 / 0.375.
+    // Yoon et al. 2016's p_D = 0.95 with p_FA = 0.3: one miss takes 0.5 to 0.025 / 0.375.
     let seed = FusionConfig {
         p_detect: 0.95,
         p_false_alarm: 0.3,
@@ -331,4 +331,105 @@ fn constant_velocity_option_follows_moving_boxes() {
             }
         }
     }
+}
+
+#[test]
+fn bad_settings_are_errors_that_name_the_parameter() {
+    use crate::Error;
+    use crate::scene::{LocalDetectorSim, SceneConfig};
+    let named = |r: crate::Result<()>| match r {
+        Err(Error::InvalidParameter { name, .. })
+        | Err(Error::Model(tracker_model::Error::InvalidParameter { name, .. })) => name,
+        other => panic!("expected an invalid parameter, got {other:?}"),
+    };
+    assert_eq!(PhdConfig::for_boxes(&[]), Err(Error::NoBoxes));
+    let phd = |c: PhdConfig| named(c.check());
+    assert_eq!(
+        phd(PhdConfig {
+            max_particles: 0,
+            ..PhdConfig::default()
+        }),
+        "max_particles"
+    );
+    assert_eq!(
+        phd(PhdConfig {
+            label_min_share: 1.5,
+            ..PhdConfig::default()
+        }),
+        "label_min_share"
+    );
+    let gm = |c: GmConfig| named(GmPhd::new(PhdConfig::default(), c).map(|_| ()));
+    assert_eq!(
+        gm(GmConfig {
+            prune_below: -1e-5,
+            ..GmConfig::default()
+        }),
+        "prune_below"
+    );
+    assert_eq!(
+        gm(GmConfig {
+            max_components: 0,
+            ..GmConfig::default()
+        }),
+        "max_components"
+    );
+    assert_eq!(
+        named(
+            SceneConfig {
+                ground_rows: [300.0, 200.0],
+                ..SceneConfig::default()
+            }
+            .check()
+        ),
+        "ground_rows"
+    );
+    assert_eq!(
+        named(
+            SceneConfig {
+                speed: [2.0, 1.0],
+                ..SceneConfig::default()
+            }
+            .check()
+        ),
+        "speed"
+    );
+    assert_eq!(
+        named(
+            LocalDetectorSim {
+                p_lost: 0.7,
+                p_relock: 0.5,
+                ..LocalDetectorSim::default()
+            }
+            .check()
+        ),
+        "p_lost"
+    );
+    assert!(SceneConfig::default().check().is_ok());
+    assert!(SceneConfig::pets_like().check().is_ok());
+    assert!(LocalDetectorSim::default().check().is_ok());
+}
+
+#[test]
+fn local_detectors_that_find_nothing_change_nothing() {
+    use crate::{NoLocalDetectors, PhdTracker};
+    let frames = still_people(6, 3);
+    let config = PhdConfig {
+        particles_per_target: 300,
+        ..PhdConfig::default()
+    };
+    let mut alone = PhdTracker::global_only(SmcPhd::new(config, 2).unwrap());
+    let mut with_local = PhdTracker::with_local_detectors(
+        SmcPhd::new(config, 2).unwrap(),
+        NoLocalDetectors,
+        FusionConfig::default(),
+    )
+    .unwrap();
+    for (frame, boxes) in (0..).zip(&frames) {
+        let a = alone.step(frame, boxes).unwrap();
+        let b = with_local.step(frame, boxes).unwrap();
+        assert_eq!(a.estimates, b.estimates, "frame {frame}");
+        assert_eq!(a.local_detectors, 0);
+    }
+    assert_eq!(alone.tracks().unwrap(), with_local.tracks().unwrap());
+    assert_eq!(alone.tracks().unwrap().len(), 3);
 }

@@ -1,5 +1,6 @@
-//! The seed's tracking loop (its Fig. 2): local detections, fusion with the global ones, the
-//! PHD filter, local detectors for new targets, confidence updates; and the output tracks.
+//! The tracking loop of Yoon, Hwang, Choi & Yoon (2016, Fig. 2): local detections, fusion with
+//! the global ones, the PHD filter, local detectors for new targets, confidence updates; and
+//! the output tracks.
 
 use std::collections::BTreeMap;
 
@@ -47,7 +48,11 @@ pub struct FrameOutput {
 }
 
 /// A PHD filter, optionally fed by local detectors, with the tracks it has reported.
-pub struct PhdTracker<F, D> {
+///
+/// [`PhdTracker::global_only`] runs the filter on the detections it is given;
+/// [`PhdTracker::with_local_detectors`] also spawns a local detector for every new track and
+/// fuses what they find with the global detections.
+pub struct PhdTracker<F, D = NoLocalDetectors> {
     filter: F,
     factory: Option<D>,
     fusion: FusionConfig,
@@ -55,13 +60,27 @@ pub struct PhdTracker<F, D> {
     tracks: BTreeMap<u64, Vec<TrackPoint>>,
 }
 
+impl<F: PhdFilter> PhdTracker<F> {
+    /// A tracker on the global detections only (no local detectors, nothing to fuse).
+    pub fn global_only(filter: F) -> Self {
+        Self {
+            filter,
+            factory: None,
+            fusion: FusionConfig::default(),
+            bank: DetectorBank::default(),
+            tracks: BTreeMap::new(),
+        }
+    }
+}
+
 impl<F: PhdFilter, D: LocalDetectorFactory> PhdTracker<F, D> {
-    /// A tracker; without a `factory` it uses the global detections only.
-    pub fn new(filter: F, factory: Option<D>, fusion: FusionConfig) -> Result<Self> {
+    /// A tracker that spawns a local detector from `factory` for every new track and fuses
+    /// their detections with the global ones (Yoon et al. 2016, eqs. 1-2 and 9-10).
+    pub fn with_local_detectors(filter: F, factory: D, fusion: FusionConfig) -> Result<Self> {
         fusion.check()?;
         Ok(Self {
             filter,
-            factory,
+            factory: Some(factory),
             fusion,
             bank: DetectorBank::default(),
             tracks: BTreeMap::new(),
@@ -129,7 +148,8 @@ impl<F: PhdFilter, D: LocalDetectorFactory> PhdTracker<F, D> {
     }
 }
 
-/// A factory for trackers that use no local detectors.
+/// The local-detector factory of a [`PhdTracker::global_only`] tracker: it is never asked for
+/// a detector.
 pub struct NoLocalDetectors;
 
 impl LocalDetectorFactory for NoLocalDetectors {

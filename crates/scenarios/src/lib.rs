@@ -6,8 +6,10 @@
 //!
 //! - [`Pipeline::compute`] takes the parameters, the scenario's seeded generator and an
 //!   [`Env`] (progress and file inputs) and returns a typed result;
-//! - [`Pipeline::metrics`] turns that result into the numbers the regression suite pins, and
-//!   [`Pipeline::present`] into a report [`Section`] of tables and [`Chart`]s.
+//! - [`Pipeline::metrics`] turns that result into the numbers the regression suite pins,
+//!   [`Pipeline::present`] into a report [`Section`] of tables and [`Chart`]s, and
+//!   [`Pipeline::claims`] into the orderings the report states, which fail the suite when
+//!   they do not hold.
 //!
 //! This crate is a leaf: it combines its siblings and nothing imports it. It touches no file,
 //! clock or terminal itself: xtask passes file contents in through [`Inputs`] and the time
@@ -151,6 +153,33 @@ pub trait Pipeline {
 
     /// The report section: tables and charts.
     fn present(output: &Self::Output) -> Section;
+
+    /// The orderings and bounds that the report or the docs state about this result (e.g.
+    /// "MCMCDA's F1 ≥ GNN's at every K"). The suite fails when one does not hold, whatever
+    /// the expected file says, so a claim cannot silently turn false.
+    fn claims(output: &Self::Output) -> Vec<Claim> {
+        let _ = output;
+        Vec::new()
+    }
+}
+
+/// A statement about a result, and whether this run bears it out.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Claim {
+    /// The statement, as the report prints it.
+    pub statement: String,
+    /// Whether it holds in this run.
+    pub holds: bool,
+}
+
+impl Claim {
+    /// A claim and its verdict.
+    pub fn new(statement: impl Into<String>, holds: bool) -> Self {
+        Self {
+            statement: statement.into(),
+            holds,
+        }
+    }
 }
 
 /// A finished pipeline run.
@@ -158,8 +187,17 @@ pub trait Pipeline {
 pub struct Run {
     /// The metrics; every one is finite.
     pub metrics: Metrics,
-    /// The report section.
+    /// The report section; it ends with a table of the claims when there are any.
     pub section: Section,
+    /// The claims checked on this run.
+    pub claims: Vec<Claim>,
+}
+
+impl Run {
+    /// The claims that do not hold.
+    pub fn failed_claims(&self) -> impl Iterator<Item = &Claim> {
+        self.claims.iter().filter(|c| !c.holds)
+    }
 }
 
 type RunFn = fn(&toml::Table, u64, &Env<'_>) -> Result<Run>;
@@ -175,9 +213,22 @@ fn run_typed<P: Pipeline>(params: &toml::Table, seed: u64, env: &Env<'_>) -> Res
     if let Some((key, value)) = metrics.iter().find(|(_, v)| !v.is_finite()) {
         bail!("metric {key} is not finite ({value})");
     }
+    let claims = P::claims(&output);
+    let mut section = P::present(&output);
+    if !claims.is_empty() {
+        let mut table = Table::new("Claims the suite checks on every run", &["claim", "holds"]);
+        for c in &claims {
+            table.row(vec![
+                c.statement.clone(),
+                if c.holds { "yes" } else { "NO" }.into(),
+            ]);
+        }
+        section.tables.push(table);
+    }
     Ok(Run {
         metrics,
-        section: P::present(&output),
+        section,
+        claims,
     })
 }
 

@@ -12,7 +12,7 @@ use mcmcda::{
     McmcdaConfig, MeasId, NearestNeighbourConfig, OnlineConfig, OnlineTracker, Problem,
     nearest_neighbour_tracks, smoothed_tracks,
 };
-use phd_filter::{FusionConfig, NoLocalDetectors, PhdConfig, PhdTracker, SmcPhd};
+use phd_filter::{PhdConfig, PhdTracker, SmcPhd};
 use serde::Deserialize;
 use tracker_model::{BoundingBox, Frame, MotRow, Track, TrackPoint, TrackSet, Vec2};
 
@@ -93,11 +93,7 @@ fn track_boxes_phd(rows: &[MotRow], settings: &TrackConfig, seed: u64) -> Result
         settings.phd.as_ref(),
         "phd",
     )?;
-    let mut phd = PhdTracker::new(
-        SmcPhd::new(config, seed)?,
-        None::<NoLocalDetectors>,
-        FusionConfig::default(),
-    )?;
+    let mut phd = PhdTracker::global_only(SmcPhd::new(config, seed)?);
     let mut by_frame: std::collections::BTreeMap<Frame, Vec<BoundingBox>> = Default::default();
     for r in rows {
         by_frame.entry(r.frame).or_default().push(r.bbox);
@@ -147,7 +143,7 @@ fn track_points(
         for (frame, dets) in &by_frame {
             problem.push_scan(*frame, &centres(dets))?;
         }
-        let window = 0..=problem.n_scans() - 1;
+        let window = problem.all_scans()?;
         let tracks = nearest_neighbour_tracks(&model, &problem, window, &settings.gnn)?;
         let labelled = tracks.into_iter().zip(0..).map(|(t, i)| (i, t)).collect();
         (labelled, problem)

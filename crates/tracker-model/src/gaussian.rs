@@ -21,6 +21,7 @@ pub struct Gaussian<const N: usize> {
 }
 
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct RawGaussian<const N: usize> {
     mean: SVector<f64, N>,
     covariance: SMatrix<f64, N, N>,

@@ -19,6 +19,7 @@ pub struct Region<const D: usize> {
 }
 
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct RawRegion<const D: usize> {
     lower: SVector<f64, D>,
     upper: SVector<f64, D>,
@@ -104,6 +105,7 @@ impl Region<2> {
 
 /// An image-style bounding box: `left`, `top` are the top-left corner, y grows downward.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct BoundingBox {
     /// x of the left edge.
     pub left: f64,

@@ -30,6 +30,7 @@ pub struct Peak {
 /// `relative_threshold` × the grid maximum, thinned by greedy non-maximum suppression within
 /// `suppression_radius`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PeakConfig {
     /// κ in (0, 1]: a peak must reach κ · max.
     pub relative_threshold: f64,

@@ -14,11 +14,35 @@
 //! * [`LikelihoodGrid`]: normalisation, weighted-sum and product fusion, peak extraction.
 //! * [`Scan`]s of [`Measurement`]s with their hidden [`Origin`], and the [`Track`] /
 //!   [`TrackSet`] output type that every tracker returns and every metric reads.
-//! * The MCMCDA scenario [`SimulationConfig`] → [`Simulator`] (Oh, Russell & Sastry, TAC 2009).
+//! * The MCMCDA scenario [`SimulationConfig`] → [`Simulator`] (Oh, Russell & Sastry 2009).
 //! * MOTChallenge rows: [`parse_mot`], [`format_mot`], conversions to and from [`TrackSet`].
 //! * [`assignment`]: optimal one-to-one matching (SciPy's solver, via `lsap`).
 //! * [`LocalDetector`] / [`LocalDetectorFactory`]: the interface of per-object detectors
 //!   trained online, shared by trackers (phd-filter) and detectors (sensors-video).
+//!
+//! Filtering and smoothing your own position measurements (one per second, one missing):
+//!
+//! ```
+//! use nalgebra::{Matrix4, Vector2, Vector4};
+//! use tracker_model::{ConstantVelocity2, CvNoise, Gaussian, filter, position_measurement, smooth};
+//!
+//! let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: 0.01 })?;
+//! let sensor = position_measurement(0.25)?; // σ = 0.5 per axis
+//! let prior = Gaussian::new(Vector4::new(0.0, 0.0, 1.0, 0.5), Matrix4::identity() * 10.0)?;
+//! let positions = [
+//!     Some(Vector2::new(0.1, -0.1)),
+//!     Some(Vector2::new(1.0, 0.6)),
+//!     None,
+//!     Some(Vector2::new(2.9, 1.4)),
+//!     Some(Vector2::new(4.1, 2.0)),
+//! ];
+//! let run = filter(&motion, &sensor, &prior, &positions)?;
+//! let smoothed = smooth(&motion, &run)?;
+//! // The missed second is filled in between its neighbours, close to (2, 1).
+//! let gap = smoothed[2].mean();
+//! assert!((gap[0] - 2.0).abs() < 0.3 && (gap[1] - 1.0).abs() < 0.3);
+//! # Ok::<(), tracker_model::Error>(())
+//! ```
 //!
 //! Invariants: a [`Gaussian`] always has a finite mean and a symmetric positive-definite
 //! covariance; a failed factorisation is an [`Error`], never a panic; randomness comes only from

@@ -7,7 +7,7 @@
 use nalgebra::{Matrix2, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Error, Result, ensure_positive};
+use crate::error::{Error, Result, ensure_non_negative, ensure_positive};
 use crate::gaussian::{
     CholeskyFactor, Gaussian, check_finite_matrix, check_positive_semidefinite, cholesky_checked,
     symmetrise,
@@ -154,7 +154,7 @@ where
 
 /// How the constant-velocity model's process noise is built.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum CvNoise {
     /// Continuous white acceleration with power spectral density `q` (per axis):
     /// Q(Δ) = q [[Δ³/3, Δ²/2], [Δ²/2, Δ]] per axis. Exact for any Δ.
@@ -179,6 +179,7 @@ pub struct ConstantVelocity2 {
 }
 
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct RawCv {
     dt_s: f64,
     noise: CvNoise,
@@ -206,12 +207,7 @@ impl ConstantVelocity2 {
         ensure_positive(dt_s, "dt_s")?;
         match noise {
             CvNoise::WhiteAcceleration { q } => {
-                if !(q.is_finite() && q >= 0.0) {
-                    return Err(Error::InvalidParameter {
-                        name: "q",
-                        reason: format!("{q} must be finite and >= 0"),
-                    });
-                }
+                ensure_non_negative(q, "q")?;
             }
             CvNoise::Discrete {
                 acceleration_covariance,
@@ -303,6 +299,7 @@ impl TransitionModel<4> for ConstantVelocity2 {
 
 /// Random walk x_{t+1} = x_t + w, w ~ N(0, Q), in any dimension; Q(k) = k Q.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RandomWalk<const N: usize> {
     step_covariance: SMatrix<f64, N, N>,
 }
@@ -328,6 +325,7 @@ impl<const N: usize> TransitionModel<N> for RandomWalk<N> {
 /// Any linear-Gaussian transition given by its one-step F and Q; over k steps
 /// F(k) = Fᵏ and Q(k) = Σ_{i<k} Fⁱ Q Fⁱᵀ.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LinearTransition<const N: usize> {
     f: SMatrix<f64, N, N>,
     q: SMatrix<f64, N, N>,
@@ -356,6 +354,7 @@ impl<const N: usize> TransitionModel<N> for LinearTransition<N> {
 
 /// A general linear measurement z = H x + v.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LinearObservation<const N: usize, const M: usize> {
     h: SMatrix<f64, M, N>,
     r: SMatrix<f64, M, M>,

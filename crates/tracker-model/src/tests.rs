@@ -730,3 +730,18 @@ fn non_negative_check_accepts_zero_only_from_the_boundary() {
         assert!(err.to_string().contains("gap_cost"), "{err}");
     }
 }
+
+#[test]
+fn misspelt_fields_in_model_configs_are_errors() {
+    let good = r#"{"dt_s":1.0,"noise":{"white_acceleration":{"q":0.5}}}"#;
+    assert!(serde_json::from_str::<ConstantVelocity2>(good).is_ok());
+    for bad in [
+        r#"{"dt_s":1.0,"noise":{"white_acceleration":{"q":0.5}},"dts":2.0}"#,
+        r#"{"dt_s":1.0,"noise":{"white_acceleration":{"q":0.5,"qq":1.0}}}"#,
+    ] {
+        let err = serde_json::from_str::<ConstantVelocity2>(bad).unwrap_err();
+        assert!(err.to_string().contains("unknown field"), "{err}");
+    }
+    let region = r#"{"lower":[0.0,0.0],"upper":[1.0,1.0],"uper":[2.0,2.0]}"#;
+    assert!(serde_json::from_str::<Region2>(region).is_err());
+}

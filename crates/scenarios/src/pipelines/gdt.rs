@@ -163,18 +163,18 @@ fn cut_gaps(truth: &TrackSet, seen: &TrackSet, mask: &Region2) -> Vec<Case> {
 }
 
 /// GDT, its goal-state variant and the baselines.
-fn methods(p: &Params) -> Vec<Method> {
-    let gdt_cfg = p.gdt;
+fn methods(p: &Params) -> Result<Vec<Method>> {
+    let gdt = p.gdt.check()?;
     let bs = p.bspline.clone();
-    vec![
+    Ok(vec![
         (
             "GDT",
-            Box::new(move |a: &[Observation], b: &[Observation]| recover_gdt(a, b, &gdt_cfg)),
+            Box::new(move |a: &[Observation], b: &[Observation]| recover_gdt(a, b, &gdt)),
         ),
         (
             "GDT goal state",
             Box::new(move |a: &[Observation], b: &[Observation]| {
-                recover_gdt_goal_state(a, b, &gdt_cfg)
+                recover_gdt_goal_state(a, b, &gdt)
             }),
         ),
         (
@@ -195,7 +195,7 @@ fn methods(p: &Params) -> Vec<Method> {
                 recover_baseline(a, b, &Baseline::LeastSquaresBSpline(bs.clone()))
             }),
         ),
-    ]
+    ])
 }
 
 /// Recovers every gap with one method, times it and scores it.
@@ -242,7 +242,7 @@ impl Pipeline for GdtGaps {
             !cases.is_empty(),
             "no trajectory crosses the mask; change the seed or the scene"
         );
-        let methods = methods(p);
+        let methods = methods(p)?;
         env.progress.set_length(methods.len() as u64);
         let longest = cases
             .iter()

@@ -9,7 +9,7 @@ use anyhow::{Context, Result};
 use eval_metrics::distance_error_series;
 use hmm_grid::{
     BaumWelchConfig, CellGrid, FitReport, Freeze, Hmm, PseudoCounts, SensorModel,
-    SpeedDistribution, StateSpace, Transitions, baum_welch, forward, posterior_decode, viterbi,
+    SpeedDistribution, StateSpace, Transitions, forward, posterior_decode, viterbi,
 };
 use rand::{Rng, RngExt};
 use rand_chacha::ChaCha8Rng;
@@ -203,7 +203,7 @@ fn learn(
     env: &Env<'_>,
 ) -> Result<Vec<(usize, Hmm, FitReport)>> {
     // The initial distribution is known (uniform), as in the seed: freeze it.
-    let config = BaumWelchConfig {
+    let trainer = BaumWelchConfig {
         max_iterations: p.bw_max_iterations,
         tolerance: 1e-6,
         freeze: Freeze {
@@ -215,11 +215,12 @@ fn learn(
             transitions: p.transition_pseudo_count,
             ..PseudoCounts::default()
         },
-    };
+    }
+    .check()?;
     env.progress.set_length(p.train_sizes.len() as u64);
     let mut runs = Vec::new();
     for &k in &p.train_sizes {
-        let (model, fit) = baum_welch(naive, &train[..k], &config).context("Baum-Welch")?;
+        let (model, fit) = trainer.fit(naive, &train[..k]).context("Baum-Welch")?;
         env.progress.advance(1);
         runs.push((k, model, fit));
     }

@@ -7,8 +7,7 @@ use anyhow::Result;
 use eval_metrics::{EvalConfig, EvalReport, MatchConfig, SuccessRate, evaluate, success_rate};
 use phd_filter::scene::{LocalDetectorSim, Scene, SceneConfig, SimulatedDetectors};
 use phd_filter::{
-    FrameOutput, FusionConfig, GmConfig, GmPhd, NoLocalDetectors, PhdConfig, PhdFilter, PhdTracker,
-    SmcPhd,
+    FrameOutput, FusionConfig, GmConfig, GmPhd, PhdConfig, PhdFilter, PhdTracker, SmcPhd,
 };
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
@@ -72,15 +71,12 @@ pub struct Output {
     methods: [MethodResult; 3],
 }
 
-/// Runs `filter` (with local detectors from `factory`, if any) over every frame.
+/// Runs `tracker` over every frame.
 fn run_tracker<F: PhdFilter, D: LocalDetectorFactory>(
-    filter: F,
-    factory: Option<D>,
-    fusion: FusionConfig,
+    mut tracker: PhdTracker<F, D>,
     detections: &[Vec<BoundingBox>],
     progress: &dyn Progress,
 ) -> Result<(TrackSet, Vec<FrameOutput>)> {
-    let mut tracker = PhdTracker::new(filter, factory, fusion)?;
     let mut frames = Vec::with_capacity(detections.len());
     for (f, boxes) in detections.iter().enumerate() {
         frames.push(tracker.step(f as u32, boxes)?);
@@ -165,23 +161,21 @@ impl Pipeline for PhdPedestrians {
         let (seed_global, seed_fused, seed_local): (u64, u64, u64) =
             (rng.random(), rng.random(), rng.random());
         let global = run_tracker(
-            SmcPhd::new(p.filter, seed_global)?,
-            None::<NoLocalDetectors>,
-            p.fusion,
+            PhdTracker::global_only(SmcPhd::new(p.filter, seed_global)?),
             &scene.detections,
             env.progress,
         )?;
         let fused = run_tracker(
-            SmcPhd::new(p.filter, seed_fused)?,
-            Some(SimulatedDetectors::new(&scene, p.local, seed_local)),
-            p.fusion,
+            PhdTracker::with_local_detectors(
+                SmcPhd::new(p.filter, seed_fused)?,
+                SimulatedDetectors::new(&scene, p.local, seed_local)?,
+                p.fusion,
+            )?,
             &scene.detections,
             env.progress,
         )?;
         let gm = run_tracker(
-            GmPhd::new(p.filter, p.gm)?,
-            None::<NoLocalDetectors>,
-            p.fusion,
+            PhdTracker::global_only(GmPhd::new(p.filter, p.gm)?),
             &scene.detections,
             env.progress,
         )?;

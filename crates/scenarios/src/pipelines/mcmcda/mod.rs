@@ -124,7 +124,7 @@ fn run_once(
     }
     .check()?;
     let problem = Problem::from_scans(&model, &sim.scans)?;
-    let window = 0..=problem.n_scans() - 1;
+    let window = problem.all_scans()?;
     let truth_tracks = tracks_by_origin(&sim.scans);
     let start = clock.now_s();
     let init = greedy_initial_partition(&model, &problem, window.clone())?;

@@ -1,7 +1,8 @@
-//! The metrics the seed papers report: MAE and MMAE of recovered gap trajectories (GDT paper,
-//! Table 1), success rate and false alarms per frame (SMC-PHD paper, Table 1), distance error
-//! over time (HMM paper), mean position error per track (audio-video fusion), and the
-//! association precision, recall and F1 of MCMCDA (TAC 2009).
+//! The metrics of the papers this workspace reproduces: MAE and MMAE of recovered gap
+//! trajectories (Oh & Jung 2015, Table 1), success rate and false alarms per frame (Yoon,
+//! Hwang, Choi & Yoon 2016, Table 1), distance error over time (Huynh & Vu 2006), mean
+//! position error per track (the audio-video fusion of Kushwaha et al. 2008, reviewed by Oh
+//! 2012), and the association precision, recall and F1 of MCMCDA (Oh, Russell & Sastry 2009).
 
 use std::collections::{HashMap, HashSet};
 
@@ -31,11 +32,11 @@ pub struct Mae {
 /// MAE of `estimate` against `truth`, point by point.
 pub fn mae(truth: &[Vec2], estimate: &[Vec2]) -> Result<Mae> {
     if truth.len() != estimate.len() {
-        return Err(Error::Incompatible(format!(
-            "MAE needs as many estimates as truth points ({} vs {})",
-            estimate.len(),
-            truth.len()
-        )));
+        return Err(Error::LengthMismatch {
+            what: "MAE estimates (one per truth point)",
+            expected: truth.len(),
+            got: estimate.len(),
+        });
     }
     if truth.is_empty() {
         return Err(Error::Model(tracker_model::Error::Empty {
@@ -101,7 +102,7 @@ pub struct SuccessRate {
 }
 
 /// SR and FAF: per frame, the one-to-one matching that maximises the total similarity among
-/// pairs reaching the threshold (seed 004 uses IoU ≥ 0.5).
+/// pairs reaching the threshold (Yoon et al. 2016 use IoU ≥ 0.5).
 pub fn success_rate(gt: &TrackSet, pred: &TrackSet, config: &MatchConfig) -> Result<SuccessRate> {
     config.check()?;
     success_rate_of(
@@ -172,7 +173,8 @@ pub struct TrackError {
 }
 
 /// Pairs each truth track with an estimated track by the IDF1 assignment at `max_distance` and
-/// reports the mean distance over their common frames (fusion experiment of seed 000).
+/// reports the mean distance over their common frames (the audio-video fusion experiment of
+/// Kushwaha et al. 2008 as reviewed by Oh 2012).
 pub fn mean_error_per_track(
     gt: &TrackSet,
     pred: &TrackSet,
@@ -245,19 +247,19 @@ pub fn association_scores<Z>(
     labels: &[Vec<Option<u64>>],
 ) -> Result<AssociationScores> {
     if scans.len() != labels.len() {
-        return Err(Error::Incompatible(format!(
-            "{} scans but labels for {}",
-            scans.len(),
-            labels.len()
-        )));
+        return Err(Error::LengthMismatch {
+            what: "label lists (one per scan)",
+            expected: scans.len(),
+            got: labels.len(),
+        });
     }
-    for (s, (scan, l)) in scans.iter().zip(labels).enumerate() {
+    for (index, (scan, l)) in scans.iter().zip(labels).enumerate() {
         if scan.measurements.len() != l.len() {
-            return Err(Error::Incompatible(format!(
-                "scan {s} has {} measurements but {} labels",
-                scan.measurements.len(),
-                l.len()
-            )));
+            return Err(Error::ScanLabelsMismatch {
+                scan: index,
+                n_measurements: scan.measurements.len(),
+                n_labels: l.len(),
+            });
         }
     }
     let truth = chain_links(scans.iter().enumerate().flat_map(|(s, scan)| {
