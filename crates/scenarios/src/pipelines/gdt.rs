@@ -1,7 +1,7 @@
-//! `gdt-gaps`: seed 003's experiment on a synthetic pedestrian scene shaped like PETS2009 S2L1
+//! `gdt-gaps`: Oh & Jung's (2015) experiment on a synthetic pedestrian scene shaped like PETS2009 S2L1
 //! (768×576 pixels, 7 fps): walkers whose speed and heading drift smoothly, a 100×100 mask, and
 //! every masked crossing recovered by GDT and by the baselines; MAE per axis, Total (both
-//! conventions) and MMAE in the format of the seed's Table 1, and time per gap (Table 2).
+//! conventions) and MMAE in the format of Oh & Jung's Table 1, and time per gap (Table 2).
 
 use anyhow::Result;
 use eval_metrics::{Mae, mae, mmae};
@@ -289,7 +289,7 @@ impl Pipeline for GdtGaps {
             title: "Goal-directed gap recovery against spline baselines".into(),
             summary: format!(
                 "{} walkers over {} frames in a {}×{} image; a {}×{} mask hides each crossing. \
-                 Seed 003 reports MMAE 2.21 px (GDT) against 2.77 (cubic spline) and 2.84 (B-spline) on \
+                 Oh & Jung (2015) report MMAE 2.21 px (GDT) against 2.77 (cubic spline) and 2.84 (B-spline) on \
                  PETS2009 S2L1; here the scene is synthetic, so compare the ordering, not the values.",
                 out.n_walkers,
                 out.n_frames,
@@ -315,11 +315,11 @@ impl Pipeline for GdtGaps {
     }
 }
 
-/// The error table (seed 003 Table 1) and the timing table (Table 2).
+/// The error table (Oh & Jung 2015, Table 1) and the timing table (Table 2).
 fn tables(out: &Output) -> (Table, Table) {
     let mut table = Table::new(
         &format!(
-            "Recovery error in pixels over {} masked crossings ({} hidden positions), format of seed 003 Table 1",
+            "Recovery error in pixels over {} masked crossings ({} hidden positions), format of Oh & Jung 2015, Table 1",
             out.n_gaps, out.n_hidden
         ),
         &[
@@ -332,7 +332,7 @@ fn tables(out: &Output) -> (Table, Table) {
         ],
     );
     let mut timing = Table::new(
-        "Execution time per gap (seed 003 Table 2 format; wall clock, this machine)",
+        "Execution time per gap (Oh & Jung 2015, Table 2 format; wall clock, this machine)",
         &["method", "µs per gap"],
     );
     for r in &out.methods {

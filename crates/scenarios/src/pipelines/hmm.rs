@@ -1,4 +1,4 @@
-//! `hmm-tracking`: seed 002's experiment. A target moves on a map (a road graph of crossroads or
+//! `hmm-tracking`: Huynh & Vu's (2006) experiment. A target moves on a map (a road graph of crossroads or
 //! a cell grid with obstacles) with habits the generic model does not know; sensors give coarse
 //! position fixes whose accuracy falls with distance. A non-learned model (kinematic
 //! constraints only, a mis-specified sensor model) is compared with the same model after
@@ -48,7 +48,7 @@ pub struct SensorParams {
 pub struct Params {
     map: MapParams,
     sensors: Vec<[f64; 2]>,
-    /// The truth's hop-count distribution; its per-state habits are drawn from the seed.
+    /// The truth's hop-count distribution; its per-state habits are drawn from the scenario's generator.
     true_speed: Vec<f64>,
     /// How strongly habits deviate from the even split (0 = none).
     habit_strength: f64,
@@ -202,7 +202,7 @@ fn learn(
     train: &[Vec<usize>],
     env: &Env<'_>,
 ) -> Result<Vec<(usize, Hmm, FitReport)>> {
-    // The initial distribution is known (uniform), as in the seed: freeze it.
+    // The initial distribution is known (uniform), as in Huynh & Vu (2006): freeze it.
     let trainer = BaumWelchConfig {
         max_iterations: p.bw_max_iterations,
         tolerance: 1e-6,

@@ -1,4 +1,4 @@
-//! `phd-pedestrians`: seed 004's Table 1 on a simulated pedestrian scene. The same global
+//! `phd-pedestrians`: Yoon et al.'s (2016) Table 1 on a simulated pedestrian scene. The same global
 //! detections are tracked by the global-only SMC-PHD filter, by the SMC-PHD filter fed with
 //! fused global and local detections, and by the GM-PHD filter; each is scored by success
 //! rate and false alarms per frame, and by MOTA, IDF1 and HOTA.
@@ -49,7 +49,7 @@ pub struct MethodResult {
     tracks: TrackSet,
     /// What it reported in each frame.
     frames: Vec<FrameOutput>,
-    /// Seed 004's success rate and false alarms per frame.
+    /// Yoon et al.'s (2016) success rate and false alarms per frame.
     sr: SuccessRate,
     /// CLEAR MOT, identity and HOTA metrics.
     report: EvalReport,
@@ -186,7 +186,12 @@ impl Pipeline for PhdPedestrians {
                 &scene,
                 global,
             )?,
-            score("fused SMC-PHD (seed 004)", "smc_fused", &scene, fused)?,
+            score(
+                "fused SMC-PHD (Yoon et al. 2016)",
+                "smc_fused",
+                &scene,
+                fused,
+            )?,
             score("GM-PHD", "gm", &scene, gm)?,
         ];
         let (detected_share, false_per_frame) = detector_quality(&scene);
@@ -229,9 +234,12 @@ impl Pipeline for PhdPedestrians {
         )];
         figures.extend(overlay_figures(out));
         Section {
-            title: format!("SMC-PHD with detector fusion (seed 004): {}", out.title),
+            title: format!(
+                "SMC-PHD with detector fusion (Yoon et al. 2016): {}",
+                out.title
+            ),
             summary: format!(
-                "Seed 004's Table 1 on a simulated scene. SR = tracked true boxes (IoU ≥ 0.5) / \
+                "Yoon et al.'s (2016) Table 1 on a simulated scene. SR = tracked true boxes (IoU ≥ 0.5) / \
                  all true boxes; FAF = unmatched estimates per frame. p_D = {}, birth intensity \
                  {}, {} particles per target; local detectors start at confidence {} and are \
                  removed at {}.",
@@ -247,7 +255,7 @@ impl Pipeline for PhdPedestrians {
     }
 }
 
-/// Seed 004's Table 1 for the three trackers.
+/// Yoon et al.'s (2016) Table 1 for the three trackers.
 fn table(out: &Output) -> Table {
     let mut table = Table::new(
         &format!(
