@@ -70,5 +70,5 @@ pub fn run() -> Outcome {
         }
     }
     eprintln!("==> scenarios");
-    scenario::run_suite(None, false)
+    scenario::run_suite(None, false, None)
 }

@@ -20,56 +20,159 @@ fn load(gt: &Path, pred: &Path) -> Result<(TrackSet, TrackSet)> {
     )
 }
 
-/// The report as (metric, value) rows, in the order the table shows them.
-fn rows(r: &EvalReport) -> Vec<(&'static str, String)> {
-    let c = &r.clear;
-    let h = &r.hota;
-    let i = &r.identity;
-    let count = |v: usize| v.to_string();
-    vec![
-        ("HOTA", fmt_num(h.hota)),
-        ("DetA", fmt_num(h.det_a)),
-        ("AssA", fmt_num(h.ass_a)),
-        ("LocA", fmt_num(h.loc_a)),
-        ("DetRe", fmt_num(h.det_re)),
-        ("DetPr", fmt_num(h.det_pr)),
-        ("AssRe", fmt_num(h.ass_re)),
-        ("AssPr", fmt_num(h.ass_pr)),
-        ("MOTA", fmt_num(c.mota)),
-        ("MOTP (mean IoU of matches)", fmt_num(c.motp)),
-        ("MODA", fmt_num(c.moda)),
-        ("Recall", fmt_num(c.recall)),
-        ("Precision", fmt_num(c.precision)),
-        ("TP", count(c.true_positives)),
-        ("FP", count(c.false_positives)),
-        ("FN", count(c.false_negatives)),
-        ("IDSW", count(c.id_switches)),
-        ("Frag", count(c.fragmentations)),
-        ("MT", count(c.mostly_tracked)),
-        ("PT", count(c.partially_tracked)),
-        ("ML", count(c.mostly_lost)),
-        ("IDF1", fmt_num(i.idf1)),
-        ("IDP", fmt_num(i.idp)),
-        ("IDR", fmt_num(i.idr)),
-        ("IDTP", count(i.idtp)),
-        ("IDFP", count(i.idfp)),
-        ("IDFN", count(i.idfn)),
-        ("SR", fmt_num(r.success.success_rate)),
-        ("FAF", fmt_num(r.success.false_alarms_per_frame)),
+/// The metrics of the table, in order.
+const NAMES: [&str; 29] = [
+    "HOTA",
+    "DetA",
+    "AssA",
+    "LocA",
+    "DetRe",
+    "DetPr",
+    "AssRe",
+    "AssPr",
+    "MOTA",
+    "MOTP (mean IoU of matches)",
+    "MODA",
+    "Recall",
+    "Precision",
+    "TP",
+    "FP",
+    "FN",
+    "IDSW",
+    "Frag",
+    "MT",
+    "PT",
+    "ML",
+    "IDF1",
+    "IDP",
+    "IDR",
+    "IDTP",
+    "IDFP",
+    "IDFN",
+    "SR",
+    "FAF",
+];
+
+/// The report's values in the order of [`NAMES`].
+fn values(r: &EvalReport) -> [f64; 29] {
+    let (c, h, i) = (&r.clear, &r.hota, &r.identity);
+    let count = |v: usize| v as f64;
+    [
+        h.hota,
+        h.det_a,
+        h.ass_a,
+        h.loc_a,
+        h.det_re,
+        h.det_pr,
+        h.ass_re,
+        h.ass_pr,
+        c.mota,
+        c.motp,
+        c.moda,
+        c.recall,
+        c.precision,
+        count(c.true_positives),
+        count(c.false_positives),
+        count(c.false_negatives),
+        count(c.id_switches),
+        count(c.fragmentations),
+        count(c.mostly_tracked),
+        count(c.partially_tracked),
+        count(c.mostly_lost),
+        i.idf1,
+        i.idp,
+        i.idr,
+        count(i.idtp),
+        count(i.idfp),
+        count(i.idfn),
+        r.success.success_rate,
+        r.success.false_alarms_per_frame,
     ]
 }
 
-/// Runs the evaluation and prints a table or JSON.
+/// The report as (metric, value) rows, in the order the table shows them.
+fn rows(r: &EvalReport) -> Vec<(&'static str, f64)> {
+    NAMES.into_iter().zip(values(r)).collect()
+}
+
+/// The short name a metric goes by in `--require`: its first word ("MOTP (mean IoU…)" → MOTP).
+fn short_name(name: &str) -> &str {
+    name.split_whitespace().next().unwrap_or(name)
+}
+
+/// One `--require` threshold: metric, comparison, bound.
+#[derive(Debug, Clone, PartialEq)]
+struct Requirement {
+    metric: String,
+    op: &'static str,
+    bound: f64,
+}
+
+impl Requirement {
+    fn holds(&self, value: f64) -> bool {
+        match self.op {
+            ">=" => value >= self.bound,
+            ">" => value > self.bound,
+            "<=" => value <= self.bound,
+            _ => value < self.bound,
+        }
+    }
+}
+
+/// Parses "MOTA>=0.9, IDF1>=0.8"; metric names are matched without regard to case.
+fn parse_requirements(text: &str) -> Result<Vec<Requirement>> {
+    let known: Vec<&str> = NAMES.iter().map(|n| short_name(n)).collect();
+    text.split(',')
+        .map(str::trim)
+        .filter(|part| !part.is_empty())
+        .map(|part| {
+            let (at, op) = [">=", "<=", ">", "<"]
+                .iter()
+                .find_map(|op| part.find(op).map(|at| (at, *op)))
+                .with_context(|| format!("requirement \"{part}\" has no >=, >, <= or <"))?;
+            let name = part[..at].trim();
+            let metric = known
+                .iter()
+                .find(|k| k.eq_ignore_ascii_case(name))
+                .with_context(|| {
+                    format!(
+                        "requirement \"{part}\": unknown metric \"{name}\"; known: {}",
+                        known.join(", ")
+                    )
+                })?;
+            let value = part[at + op.len()..].trim();
+            let bound: f64 = value
+                .parse()
+                .ok()
+                .filter(|v: &f64| v.is_finite())
+                .with_context(|| {
+                    format!("requirement \"{part}\": \"{value}\" is not a finite number")
+                })?;
+            Ok(Requirement {
+                metric: metric.to_string(),
+                op,
+                bound,
+            })
+        })
+        .collect()
+}
+
+/// Runs the evaluation and prints a table or JSON; with `require`, false when a threshold fails.
 #[expect(
     clippy::print_stdout,
     reason = "the evaluation is printed on the terminal"
 )]
-pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool) -> Outcome {
+pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool, require: Option<&str>) -> Outcome {
+    let requirements = require
+        .map(parse_requirements)
+        .transpose()?
+        .unwrap_or_default();
     let (gt_set, pred_set) = load(gt, pred)?;
     let config = EvalConfig {
         matching: MatchConfig::iou(iou),
     };
     let report = evaluate(&gt_set, &pred_set, &config).context("evaluation failed")?;
+    let values = rows(&report);
     if json {
         println!("{}", serde_json::to_string_pretty(&report)?);
     } else {
@@ -83,12 +186,30 @@ pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool) -> Outcome {
             ),
             &["metric", "value"],
         );
-        for (name, value) in rows(&report) {
-            table.row(vec![name.to_string(), value]);
+        for (name, value) in &values {
+            table.row(vec![name.to_string(), fmt_num(*value)]);
         }
         println!("{}", to_markdown(&table));
     }
-    Ok(true)
+    let mut all_hold = true;
+    for req in &requirements {
+        let value = values
+            .iter()
+            .find(|(n, _)| short_name(n) == req.metric)
+            .map_or(f64::NAN, |(_, v)| *v);
+        let holds = req.holds(value);
+        all_hold &= holds;
+        let verdict = if holds { "holds" } else { "FAILS" };
+        println!(
+            "requirement {}{}{}: {verdict} ({} = {})",
+            req.metric,
+            req.op,
+            req.bound,
+            req.metric,
+            fmt_num(value)
+        );
+    }
+    Ok(all_hold)
 }
 
 #[cfg(test)]
@@ -115,5 +236,38 @@ mod tests {
         let (g, _) = load(&bad, &gt).unwrap();
         assert_eq!(g.n_points(), 1);
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn requirements_parse_and_compare() {
+        let reqs = parse_requirements("mota>=0.9, IDF1 > 0.8,FP<3,").unwrap();
+        assert_eq!(
+            reqs,
+            vec![
+                Requirement {
+                    metric: "MOTA".into(),
+                    op: ">=",
+                    bound: 0.9
+                },
+                Requirement {
+                    metric: "IDF1".into(),
+                    op: ">",
+                    bound: 0.8
+                },
+                Requirement {
+                    metric: "FP".into(),
+                    op: "<",
+                    bound: 3.0
+                },
+            ]
+        );
+        assert!(reqs[0].holds(0.9) && !reqs[0].holds(0.899));
+        assert!(!reqs[1].holds(0.8) && reqs[1].holds(0.81));
+        assert!(reqs[2].holds(2.0) && !reqs[2].holds(3.0));
+        assert!(!reqs[0].holds(f64::NAN));
+        for bad in ["MOTA=0.9", "MOTX>=1", "MOTA>=high", "MOTA>=inf"] {
+            let err = format!("{:#}", parse_requirements(bad).unwrap_err());
+            assert!(err.contains(bad), "{err}");
+        }
     }
 }

@@ -12,14 +12,16 @@ use clap::{Parser, Subcommand};
 
 mod ci;
 mod eval;
+mod junit;
 mod plot;
 mod report;
 mod scenario;
+mod screenshot;
 mod track;
 
 /// Workspace tasks for the tracking toolkit.
 #[derive(Parser)]
-#[command(name = "cargo xtask", version, about)]
+#[command(name = "cargo xtask", bin_name = "cargo xtask", version, about)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -27,7 +29,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Run every fixtures/scenarios/*.toml and compare its metrics with fixtures/expected/.
+    /// Run every fixtures/scenarios/*.toml, compare its metrics with fixtures/expected/ and
+    /// check its claims.
     Scenarios {
         /// Rewrite fixtures/expected/NAME.json with the metrics of this run.
         #[arg(long)]
@@ -35,21 +38,31 @@ enum Command {
         /// Only scenarios whose name contains this text.
         #[arg(long)]
         filter: Option<String>,
+        /// Also write the verdicts as JUnit XML to this file, for CI dashboards.
+        #[arg(long)]
+        junit: Option<PathBuf>,
     },
-    /// Run all scenarios, print each section's tables, and write target/report/.
+    /// Run the scenarios, print each section's tables, and write the HTML and Markdown report.
     Report {
-        /// Output directory (default: target/report in the workspace).
+        /// Output directory [default: target/report in the workspace].
         #[arg(long)]
         out: Option<PathBuf>,
         /// Only scenarios whose name contains this text.
         #[arg(long)]
         filter: Option<String>,
+        /// Also take a PNG screenshot of every page with headless Chromium (skipped with a
+        /// note when no `chromium` is on the PATH; Debian: `apt-get install chromium`).
+        #[arg(long)]
+        screenshots: bool,
     },
     /// fmt, clippy, tests, docs, bench build and the scenario suite: what CI runs.
     Ci,
-    /// Track MOTChallenge detections (box centres as points) and write MOTChallenge tracks.
+    /// Track MOTChallenge detections and write MOTChallenge tracks. Without --config each
+    /// tracker's model is scaled to the detections' median box size.
     Track {
-        /// The tracker: mcmcda, gnn or phd.
+        /// mcmcda: online sliding-window MCMCDA on the box centres; gnn: global nearest
+        /// neighbour with M-of-N confirmation on the box centres (both output smoothed centres
+        /// with each track's mean detection size); phd: SMC-PHD on the boxes themselves.
         #[arg(long)]
         tracker: scenarios::track::Tracker,
         /// Detections (frame,id,left,top,width,height,conf,...).
@@ -63,7 +76,8 @@ enum Command {
         /// `phd_filter::PhdConfig`) tables.
         #[arg(long)]
         config: Option<PathBuf>,
-        /// Seed of the MCMC generator.
+        /// Seed of the tracker's random generator (MCMCDA's chains, the PHD filter's
+        /// particles; GNN draws nothing).
         #[arg(long, default_value_t = 0)]
         seed: u64,
     },
@@ -81,16 +95,29 @@ enum Command {
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
+        /// Thresholds that must hold, e.g. "MOTA>=0.9,IDF1>=0.8" (any metric of the table;
+        /// >=, >, <=, <); the command exits with status 1 when one fails.
+        #[arg(long)]
+        require: Option<String>,
     },
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let outcome = match cli.command {
-        Command::Scenarios { bless, filter } => scenario::run_suite(filter.as_deref(), bless),
-        Command::Report { out, filter } => report::run(
+        Command::Scenarios {
+            bless,
+            filter,
+            junit,
+        } => scenario::run_suite(filter.as_deref(), bless, junit.as_deref()),
+        Command::Report {
+            out,
+            filter,
+            screenshots,
+        } => report::run(
             &out.unwrap_or_else(|| workspace_root().join("target/report")),
             filter.as_deref(),
+            screenshots,
         ),
         Command::Ci => ci::run(),
         Command::Track {
@@ -105,7 +132,8 @@ fn main() -> ExitCode {
             pred,
             iou,
             json,
-        } => eval::run(&gt, &pred, iou, json),
+            require,
+        } => eval::run(&gt, &pred, iou, json, require.as_deref()),
     };
     match outcome {
         Ok(true) => ExitCode::SUCCESS,

@@ -3,7 +3,7 @@
 
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
-use scenarios::{Chart, Style};
+use scenarios::{Chart, Series, Style, YAxis};
 
 /// Matplotlib's "tab10" colours: distinct on white and for most colour-blind readers.
 const PALETTE: [RGBColor; 8] = [
@@ -30,62 +30,140 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     (lo - pad, hi + pad)
 }
 
-/// Draws the chart into an SVG document of 760×520 pixels.
+/// A tick label: whole numbers without decimals, others with at most four significant digits.
+fn tick(v: f64) -> String {
+    if (v - v.round()).abs() <= 1e-9 * v.abs().max(1.0) {
+        return format!("{:.0}", v.round());
+    }
+    let digits = (3 - v.abs().log10().floor() as i32).clamp(0, 8) as usize;
+    let text = format!("{v:.digits$}");
+    text.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+/// Width of the plotting area and of the legend column to its right, and the height.
+const PLOT_W: u32 = 760;
+const LEGEND_W: u32 = 230;
+const HEIGHT: u32 = 520;
+
+/// Draws the chart into an SVG document: the plot, and its legend in a column to the right so
+/// that it never covers data. Legend samples are drawn exactly as their series.
 pub fn render(chart: &Chart) -> Result<String> {
     let (axes, series) = (&chart.axes, &chart.series);
+    let labelled: Vec<&Series> = series.iter().filter(|s| !s.label.is_empty()).collect();
+    let legend_w = if labelled.is_empty() { 0 } else { LEGEND_W };
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (760, 520)).into_drawing_area();
+        let root =
+            SVGBackend::with_string(&mut svg, (PLOT_W + legend_w, HEIGHT)).into_drawing_area();
         let to_err = |e: &dyn std::fmt::Display| anyhow!("plot {:?}: {e}", axes.title);
         root.fill(&WHITE).map_err(|e| to_err(&e))?;
+        let (plot_area, legend_area) = root.split_horizontally(PLOT_W);
         let (x0, x1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
         let (y0, y1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
-        let mut chart = ChartBuilder::on(&root)
+        let y_range = match chart.y_axis {
+            YAxis::Up => y0..y1,
+            YAxis::Down => y1..y0,
+        };
+        let mut plot = ChartBuilder::on(&plot_area)
             .caption(&axes.title, ("sans-serif", 18))
             .margin(12)
             .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(x0..x1, y0..y1)
+            .y_label_area_size(64)
+            .build_cartesian_2d(x0..x1, y_range)
             .map_err(|e| to_err(&e))?;
-        chart
-            .configure_mesh()
+        plot.configure_mesh()
             .x_desc(&axes.x)
             .y_desc(&axes.y)
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
             .light_line_style(WHITE.mix(0.0))
+            .bold_line_style(BLACK.mix(0.08))
             .draw()
             .map_err(|e| to_err(&e))?;
         for s in series {
-            let colour = PALETTE[s.colour % PALETTE.len()].to_rgba();
-            let drawn = match s.style {
-                Style::Line => chart.draw_series(LineSeries::new(
+            let (colour, width) = look(s);
+            match s.style {
+                Style::Line | Style::ThinLine => plot.draw_series(LineSeries::new(
                     s.points.iter().copied(),
-                    colour.stroke_width(2),
+                    colour.stroke_width(width),
                 )),
-                Style::ThinLine => chart.draw_series(LineSeries::new(
-                    s.points.iter().copied(),
-                    colour.mix(0.6).stroke_width(1),
-                )),
-                Style::Markers => chart.draw_series(
-                    s.points
-                        .iter()
-                        .map(|&p| Circle::new(p, 2, colour.mix(0.7).filled())),
-                ),
+                Style::Markers => {
+                    plot.draw_series(s.points.iter().map(|&p| Circle::new(p, 2, colour.filled())))
+                }
             }
             .map_err(|e| to_err(&e))?;
-            if !s.label.is_empty() {
-                drawn.label(s.label.clone()).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-                });
-            }
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK.mix(0.4))
-            .position(SeriesLabelPosition::UpperLeft)
-            .draw()
+        for (i, s) in labelled.iter().enumerate() {
+            let y = 48 + 22 * i as i32;
+            let (colour, width) = look(s);
+            match s.style {
+                Style::Markers => legend_area.draw(&Circle::new((19, y), 3, colour.filled())),
+                _ => legend_area.draw(&PathElement::new(
+                    vec![(8, y), (30, y)],
+                    colour.stroke_width(width),
+                )),
+            }
             .map_err(|e| to_err(&e))?;
+            legend_area
+                .draw(&Text::new(
+                    s.label.clone(),
+                    (38, y - 7),
+                    ("sans-serif", 16).into_font(),
+                ))
+                .map_err(|e| to_err(&e))?;
+        }
         root.present().map_err(|e| to_err(&e))?;
     }
     Ok(svg)
+}
+
+/// The colour and stroke width a series is drawn with (the legend uses the same).
+fn look(s: &Series) -> (RGBAColor, u32) {
+    let colour = PALETTE[s.colour % PALETTE.len()].to_rgba();
+    match s.style {
+        Style::Line => (colour, 2),
+        Style::ThinLine => (colour.mix(0.6), 1),
+        Style::Markers => (colour.mix(0.7), 1),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_drop_needless_decimals() {
+        assert_eq!(tick(10.0), "10");
+        assert_eq!(tick(340.0), "340");
+        assert_eq!(tick(-2.0), "-2");
+        assert_eq!(tick(0.25), "0.25");
+        assert_eq!(tick(12.5), "12.5");
+        assert_eq!(tick(0.1 + 0.2), "0.3");
+        assert_eq!(tick(0.0), "0");
+    }
+
+    #[test]
+    fn image_charts_render_with_y_down_and_a_legend_column() {
+        let chart = Chart::new(
+            "boxes",
+            "x (px)",
+            "y (px, downward)",
+            vec![
+                Series::new("truth", vec![(0.0, 0.0), (10.0, 5.0)], Style::Line, 0),
+                Series::new("", vec![(3.0, 4.0)], Style::Markers, 1),
+            ],
+        )
+        .in_image_coordinates();
+        let svg = render(&chart).unwrap();
+        assert!(svg.contains("width=\"990\""), "legend column added");
+        assert!(
+            svg.contains(">\ntruth\n<"),
+            "the legend names the labelled series"
+        );
+        assert_eq!(
+            svg.matches("<circle").count(),
+            1,
+            "unlabelled markers get no legend entry"
+        );
+    }
 }

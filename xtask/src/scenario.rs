@@ -134,7 +134,7 @@ fn expected_path(name: &str) -> PathBuf {
         .join(format!("{name}.json"))
 }
 
-/// Loads every scenario file, sorted by name, optionally filtered.
+/// Loads every scenario file, sorted by name, optionally filtered; an error when none is left.
 pub fn load_all(filter: Option<&str>) -> Result<Vec<Scenario>> {
     let dir = scenarios_dir();
     let mut out = Vec::new();
@@ -157,7 +157,11 @@ pub fn load_all(filter: Option<&str>) -> Result<Vec<Scenario>> {
         });
     }
     out.sort_by(|a, b| a.name.cmp(&b.name));
-    Ok(out)
+    match filter {
+        _ if !out.is_empty() => Ok(out),
+        Some(f) => bail!("no scenario name contains \"{f}\" (see {})", dir.display()),
+        None => bail!("no scenario files in {}", dir.display()),
+    }
 }
 
 fn load_file(path: &Path) -> Result<ScenarioFile> {
@@ -257,18 +261,41 @@ fn bless(scenario: &Scenario, metrics: &Metrics) -> Result<()> {
     fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
 }
 
-/// Checks (or blesses) every result, printing one line per scenario; true when all pass. A
-/// claim that does not hold fails its scenario even when blessing.
-#[expect(clippy::print_stdout, reason = "the suite reports on the terminal")]
-pub fn check_results(results: &[RunResult], bless_results: bool) -> Result<bool> {
-    let mut all_ok = true;
+/// How one scenario fared.
+pub struct Verdict {
+    /// The scenario's name.
+    pub name: String,
+    /// Wall time of its run.
+    pub seconds: f64,
+    /// What went wrong: an error, metrics off their expected values, claims that do not hold.
+    /// Empty when it passed.
+    pub problems: Vec<String>,
+    /// A short account of a pass, e.g. "14 metrics match, 2 claims hold".
+    pub summary: String,
+}
+
+impl Verdict {
+    /// Whether the scenario passed.
+    pub fn passed(&self) -> bool {
+        self.problems.is_empty()
+    }
+}
+
+/// Checks (or blesses) every result. A claim that does not hold fails its scenario even when
+/// blessing.
+pub fn verdicts(results: &[RunResult], bless_results: bool) -> Result<Vec<Verdict>> {
+    let mut verdicts = Vec::with_capacity(results.len());
     for r in results {
-        let (name, secs) = (&r.scenario.name, r.elapsed.as_secs_f64());
+        let (name, seconds) = (r.scenario.name.clone(), r.elapsed.as_secs_f64());
         let out = match &r.output {
             Ok(out) => out,
             Err(err) => {
-                all_ok = false;
-                println!("FAIL {name:<28} {secs:>7.2}s  error: {err:#}");
+                verdicts.push(Verdict {
+                    name,
+                    seconds,
+                    problems: vec![format!("error: {err:#}")],
+                    summary: String::new(),
+                });
                 continue;
             }
         };
@@ -276,46 +303,69 @@ pub fn check_results(results: &[RunResult], bless_results: bool) -> Result<bool>
             .failed_claims()
             .map(|c| format!("claim does not hold: {}", c.statement))
             .collect();
-        let verdict = if bless_results {
+        let metrics = plural(out.metrics.len(), "metric", "metrics");
+        let mut summary = if bless_results {
             bless(&r.scenario, &out.metrics)?;
-            format!("{} metrics written", out.metrics.len())
+            format!("{metrics} written")
         } else {
             problems.extend(compare(&r.scenario, &out.metrics)?);
-            format!("{} metrics match", out.metrics.len())
+            format!("{metrics} match")
         };
-        let claims = match out.claims.len() {
-            0 => String::new(),
-            n => format!(", {n} claims hold"),
-        };
-        if problems.is_empty() {
+        if !out.claims.is_empty() {
+            let claims = plural(out.claims.len(), "claim holds", "claims hold");
+            summary = format!("{summary}, {claims}");
+        }
+        verdicts.push(Verdict {
+            name,
+            seconds,
+            problems,
+            summary,
+        });
+    }
+    Ok(verdicts)
+}
+
+/// "1 scenario", "3 scenarios".
+pub fn plural(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
+/// Prints one line per scenario (and its problems); true when all passed.
+#[expect(clippy::print_stdout, reason = "the suite reports on the terminal")]
+pub fn print_verdicts(verdicts: &[Verdict], bless_results: bool) -> bool {
+    for v in verdicts {
+        let (name, secs) = (&v.name, v.seconds);
+        if v.passed() {
             let word = if bless_results { "bless" } else { "ok" };
-            println!("{word:<4} {name:<28} {secs:>7.2}s  {verdict}{claims}");
+            println!("{word:<4} {name:<28} {secs:>7.2}s  {}", v.summary);
         } else {
-            all_ok = false;
             println!("FAIL {name:<28} {secs:>7.2}s");
-            for p in problems {
+            for p in &v.problems {
                 println!("       {p}");
             }
         }
     }
-    Ok(all_ok)
+    verdicts.iter().all(Verdict::passed)
 }
 
 /// `cargo xtask scenarios`.
 #[expect(clippy::print_stdout, reason = "the suite reports on the terminal")]
-pub fn run_suite(filter: Option<&str>, bless_results: bool) -> Outcome {
+pub fn run_suite(filter: Option<&str>, bless_results: bool, junit: Option<&Path>) -> Outcome {
     let scenarios = load_all(filter)?;
-    if scenarios.is_empty() {
-        bail!("no scenario matches {filter:?}");
-    }
     let n = scenarios.len();
     let results = run_all(scenarios);
-    let ok = check_results(&results, bless_results)?;
+    let verdicts = verdicts(&results, bless_results)?;
+    let ok = print_verdicts(&verdicts, bless_results);
+    if let Some(path) = junit {
+        fs::write(path, crate::junit::xml(&verdicts))
+            .with_context(|| format!("writing {}", path.display()))?;
+    }
     let verdict = match (bless_results, ok) {
-        (true, _) => "blessed",
+        (true, true) => "blessed",
+        (true, false) => "blessed, with failures listed above",
         (false, true) => "passed",
         (false, false) => "run, with failures listed above",
     };
-    println!("{n} scenarios {verdict}");
+    println!("{} {verdict}", plural(n, "scenario", "scenarios"));
     Ok(ok)
 }

@@ -33,7 +33,20 @@ pub fn run(
 ) -> Outcome {
     let rows = parse_detections(&read_file(input)?, &input.display().to_string())?;
     let set = track_detections(tracker, &rows, &read_config(config)?, seed)?;
-    fs::write(out, format_mot(&set.to_mot_rows(0.0)))
+    let mut boxes = set.to_mot_rows(0.0);
+    for row in &mut boxes {
+        // Smoothing leaves float noise in the last digits (28.359999999999978); a thousandth
+        // of a pixel is far below any detector's precision.
+        for v in [
+            &mut row.bbox.left,
+            &mut row.bbox.top,
+            &mut row.bbox.width,
+            &mut row.bbox.height,
+        ] {
+            *v = (*v * 1e3).round() / 1e3;
+        }
+    }
+    fs::write(out, format_mot(&boxes))
         .with_context(|| format!("cannot write {}", out.display()))?;
     println!(
         "{} tracks ({} boxes) from {} detections written to {}",

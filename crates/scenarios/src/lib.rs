@@ -57,7 +57,7 @@ mod pipelines;
 mod report;
 pub mod track;
 
-pub use report::{Axes, Chart, Figure, Section, Series, Style, Table, fmt_num};
+pub use report::{Axes, Chart, Figure, Section, Series, Style, Table, YAxis, fmt_num};
 
 /// Metric name → value, sorted so that expected files diff cleanly.
 pub type Metrics = BTreeMap<String, f64>;
@@ -161,6 +161,26 @@ pub trait Pipeline {
         let _ = output;
         Vec::new()
     }
+
+    /// The few numbers that sum the result up beside the paper's own and a peer's, for the
+    /// report's front page.
+    fn headlines(output: &Self::Output) -> Vec<Headline> {
+        let _ = output;
+        Vec::new()
+    }
+}
+
+/// One row of the report's headline table: a quantity, the paper's value, ours and a peer's.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Headline {
+    /// What is measured, with its setting (e.g. "MMAE (px), 200 gaps, GDT").
+    pub quantity: String,
+    /// The paper's published value, where it reports one (with its own setting if different).
+    pub paper: Option<String>,
+    /// Ours, formatted (with its confidence interval where there is one).
+    pub ours: String,
+    /// A peer implementation's value on the same data, and which peer.
+    pub peer: Option<String>,
 }
 
 /// A statement about a result, and whether this run bears it out.
@@ -191,6 +211,8 @@ pub struct Run {
     pub section: Section,
     /// The claims checked on this run.
     pub claims: Vec<Claim>,
+    /// The rows this run adds to the report's headline table.
+    pub headlines: Vec<Headline>,
 }
 
 impl Run {
@@ -229,6 +251,7 @@ fn run_typed<P: Pipeline>(params: &toml::Table, seed: u64, env: &Env<'_>) -> Res
         metrics,
         section,
         claims,
+        headlines: P::headlines(&output),
     })
 }
 

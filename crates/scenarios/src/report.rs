@@ -70,10 +70,12 @@ pub struct Chart {
     pub axes: Axes,
     /// The series, drawn in order.
     pub series: Vec<Series>,
+    /// Which way y grows on the page.
+    pub y_axis: YAxis,
 }
 
 impl Chart {
-    /// A chart titled `title` with axis labels `x` and `y`.
+    /// A chart titled `title` with axis labels `x` and `y` (give units, e.g. "error (px)").
     pub fn new(title: &str, x: &str, y: &str, series: Vec<Series>) -> Self {
         Self {
             axes: Axes {
@@ -82,8 +84,24 @@ impl Chart {
                 y: y.to_string(),
             },
             series,
+            y_axis: YAxis::Up,
         }
     }
+
+    /// The same chart in image coordinates: y grows downward, as in the image.
+    pub fn in_image_coordinates(mut self) -> Self {
+        self.y_axis = YAxis::Down;
+        self
+    }
+}
+
+/// Which way a chart's y axis grows on the page.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum YAxis {
+    /// Upward, as in a graph.
+    Up,
+    /// Downward, as in image coordinates (row 0 at the top).
+    Down,
 }
 
 /// A chart's title and axis labels.

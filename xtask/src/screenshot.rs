@@ -1,0 +1,60 @@
+//! `cargo xtask report --screenshots`: a PNG of every report page, taken with headless
+//! Chromium, so that the pages get looked at. Skipped with a note when no browser is found.
+
+use std::fs;
+use std::path::Path;
+use std::process::Command;
+
+use anyhow::{Context, Result};
+
+/// Browser executables tried in order.
+const BROWSERS: [&str; 3] = ["chromium", "chromium-browser", "google-chrome"];
+
+/// Writes `screenshots/PAGE.png` for each page (file names relative to `out_dir`).
+#[expect(
+    clippy::print_stderr,
+    reason = "where the screenshots went, or why none were taken"
+)]
+pub fn take(out_dir: &Path, pages: &[String]) -> Result<()> {
+    let Some(browser) = BROWSERS.iter().find(|b| {
+        Command::new(b)
+            .arg("--version")
+            .output()
+            .is_ok_and(|o| o.status.success())
+    }) else {
+        eprintln!(
+            "note: no chromium on the PATH, so no screenshots (Debian: apt-get install chromium)"
+        );
+        return Ok(());
+    };
+    let dir = out_dir.join("screenshots");
+    fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    let out_dir = fs::canonicalize(out_dir)?;
+    for page in pages {
+        let html = fs::read_to_string(out_dir.join(page))?;
+        // A tall enough window for the whole page: the screenshot is of the window.
+        let height =
+            400 + 560 * html.matches("<figure>").count() + 26 * html.matches("<tr>").count();
+        let png = dir.join(page.replace(".html", ".png"));
+        let status = Command::new(browser)
+            .args([
+                "--headless",
+                "--no-sandbox",
+                "--disable-gpu",
+                "--hide-scrollbars",
+                &format!("--window-size=1200,{}", height.min(16_000)),
+                &format!("--screenshot={}", png.display()),
+            ])
+            .arg(format!("file://{}", out_dir.join(page).display()))
+            .output()
+            .with_context(|| format!("running {browser}"))?;
+        if !status.status.success() {
+            anyhow::bail!(
+                "{browser} failed on {page}: {}",
+                String::from_utf8_lossy(&status.stderr)
+            );
+        }
+    }
+    eprintln!("screenshots of {} pages in {}", pages.len(), dir.display());
+    Ok(())
+}
