@@ -366,7 +366,8 @@ impl Model {
             TrackEnd::Undetected => {
                 let p_z = self.config.p_disappear;
                 let s = (1.0 - p_z) * (1.0 - self.config.p_detect);
-                let s_n = s.powi(n as i32);
+                // powf: n can exceed i32 (a gap of billions of frames).
+                let s_n = s.powf(n as f64);
                 (p_z * (1.0 - s_n) / (1.0 - s) + s_n).ln()
             }
         }

@@ -39,8 +39,8 @@ pub enum Error {
         frame: Frame,
         /// The first frame held.
         first: Frame,
-        /// One past the last frame held.
-        end: Frame,
+        /// One past the last frame held (a u64: it can be 2^32).
+        end: u64,
     },
     /// A late measurement arrives after its scan left the online tracker's window, when its
     /// associations are already final.

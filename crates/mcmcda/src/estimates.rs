@@ -6,13 +6,36 @@ use tracker_model::{
 };
 
 use crate::config::Model;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::problem::{MeasId, Problem};
+
+/// Checks that every id of track `k` exists in `problem` and that the ids lie in strictly
+/// increasing scans.
+fn check_ids(problem: &Problem, k: usize, track: &[MeasId]) -> Result<()> {
+    if let Some(&id) = track.iter().find(|&&m| !problem.contains(m)) {
+        return Err(Error::UnknownMeasurement { track: k, id });
+    }
+    match track
+        .windows(2)
+        .find(|p| problem.scan_of(p[1]) <= problem.scan_of(p[0]))
+    {
+        Some(p) => Err(Error::ScansNotIncreasing {
+            track: k,
+            first: p[0],
+            second: p[1],
+        }),
+        None => Ok(()),
+    }
+}
 
 /// Kalman-smoothed states of each track at every frame from its first to its last
 /// measurement (missed scans filled by the smoother), one scan period per step. Track i gets
 /// id `first_id + i`. The filter starts at the first measurement with position covariance R
 /// and the configured initial velocity variance per axis (v̄²/3 for the two-point start).
+///
+/// Each track's ids must exist in `problem` ([`Error::UnknownMeasurement`]) and lie in
+/// strictly increasing scans ([`Error::ScansNotIncreasing`]); empty tracks are skipped. The
+/// output has a point per frame of each track's span, so its size grows with the span.
 pub fn smoothed_tracks(
     model: &Model,
     problem: &Problem,
@@ -25,6 +48,9 @@ pub fn smoothed_tracks(
         crate::TrackInit::FirstMeasurement { .. } => model.initial_velocity_variance,
         crate::TrackInit::TwoPoint { .. } => cfg.max_speed * cfg.max_speed / 3.0,
     };
+    for (k, track) in tracks.iter().enumerate() {
+        check_ids(problem, k, track)?;
+    }
     let mut out = Vec::with_capacity(tracks.len());
     for (i, track) in tracks.iter().enumerate() {
         let (Some(&first), Some(&last)) = (track.first(), track.last()) else {
@@ -62,17 +88,30 @@ pub fn smoothed_tracks(
 
 /// For each scan, the label (track index) of each of its measurements in the order the
 /// problem holds them, `None` for false alarms: the input of
-/// `eval_metrics::association_scores`.
-pub fn measurement_labels(problem: &Problem, tracks: &[Vec<MeasId>]) -> Vec<Vec<Option<u64>>> {
+/// `eval_metrics::association_scores`. One list per scan index, empty scans included, so
+/// the output grows with the frame span (as the scans it is scored against do).
+///
+/// Fails with [`Error::UnknownMeasurement`] for an id the problem does not have and
+/// [`Error::MeasurementTaken`] for an id in two tracks.
+pub fn measurement_labels(
+    problem: &Problem,
+    tracks: &[Vec<MeasId>],
+) -> Result<Vec<Vec<Option<u64>>>> {
     let mut label = vec![None; problem.n_measurements()];
     for (k, track) in tracks.iter().enumerate() {
-        for &m in track {
-            label[m as usize] = Some(k as u64);
+        for &id in track {
+            match label.get_mut(id as usize) {
+                None => return Err(Error::UnknownMeasurement { track: k, id }),
+                Some(Some(_)) => return Err(Error::MeasurementTaken { track: k, id }),
+                Some(slot) => *slot = Some(k as u64),
+            }
         }
     }
-    (0..problem.n_scans())
-        .map(|s| problem.scan(s).iter().map(|&m| label[m as usize]).collect())
-        .collect()
+    let mut out = vec![Vec::new(); problem.n_scans()];
+    for (s, scan) in problem.nonempty_scans(0..=problem.n_scans().saturating_sub(1)) {
+        out[s] = scan.iter().map(|&m| label[m as usize]).collect();
+    }
+    Ok(out)
 }
 
 /// The true partition of simulated scans (each target's detections, in scan order), with

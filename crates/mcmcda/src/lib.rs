@@ -15,7 +15,8 @@
 //! * [`OnlineTracker`]: Algorithm 4, sliding-window MCMCDA with persistent track labels;
 //! * [`single_scan_mcmcda`]: Algorithms 1-2, JPDA probabilities β for a known number of
 //!   targets by MCMC, and [`jpda_exact`] by enumeration;
-//! * baselines: [`nearest_neighbour_tracks`] (GNN with M-of-N confirmation, and the greedy
+//! * baselines: [`nearest_neighbour_tracks`] (GNN with the log-likelihood-ratio costs of
+//!   [`AssignmentCost`], M-of-N confirmation and deletion after a gap, and the greedy
 //!   filter [`greedy_initial_partition`] that starts the chain);
 //! * [`smoothed_tracks`], [`measurement_labels`], [`tracks_by_origin`]: from partitions to
 //!   trajectories and scores;
@@ -80,7 +81,8 @@ pub use config::{GapDistribution, McmcdaConfig, Model, Move, MoveWeights, TrackE
 pub use error::{Error, Result};
 pub use estimates::{measurement_labels, smoothed_tracks, tracks_by_origin};
 pub use nearest::{
-    Assignment, NearestNeighbourConfig, greedy_initial_partition, nearest_neighbour_tracks,
+    Assignment, AssignmentCost, NearestNeighbourConfig, greedy_initial_partition,
+    nearest_neighbour_tracks,
 };
 pub use online::{OnlineConfig, OnlineResult, OnlineStep, OnlineTracker};
 pub use partition::Partition;

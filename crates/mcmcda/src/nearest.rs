@@ -1,12 +1,30 @@
 //! Nearest-neighbour baselines on the same model: the greedy multi-scan nearest-neighbour filter
 //! (NNF) that initialises MCMCDA in Oh, Russell & Sastry 2009 §V, and global nearest neighbour
-//! (GNN) with optimal assignment and M-of-N confirmation.
+//! (GNN) with optimal assignment, a non-assignment cost from the clutter density, M-of-N
+//! confirmation and deletion after a gap.
 //!
 //! Both run one Kalman filter per track, scan by scan. A measurement can continue a track
 //! only if the pair is allowed in Ω (gap ≤ d̄ scans, inside the neighbourhood radius) and its
-//! innovation passes the χ² gate; the cost of a pair is its negative log predictive density.
-//! Unused measurements start tentative tracks. Every output track therefore is a feasible
-//! MCMCDA track.
+//! innovation passes the χ² gate. Unused measurements start tentative tracks. Every output
+//! track therefore is a feasible MCMCDA track.
+//!
+//! GNN's costs ([`AssignmentCost::LogLikelihoodRatio`]) are the track-score increments of
+//! Blackman 2004 (IEEE AES Magazine 19(1), §"track score"), the log-likelihood-ratio form of
+//! GNN that JPDA's hypothesis weights also use (Bar-Shalom, Willett & Tian 2011, §6): within
+//! one scan, a joint assignment of measurements z_j to tracks k has likelihood
+//!
+//!   Π_(k,j) assigned p_d N(z_j; ẑ_k, S_k) · Π_k unassigned (1 − p_d) · Π_j unassigned λ,
+//!
+//! where λ = (λ_f + λ_b) is the density of measurements that continue no track (clutter or
+//! a newborn; per unit volume per scan). Dividing by the "nothing assigned" hypothesis, the
+//! best joint assignment minimises Σ c_kj over the assigned pairs with
+//!
+//!   c_kj = −ln [ p_d N(z_j; ẑ_k, S_k) / ((1 − p_d) λ) ],
+//!
+//! and leaving a track unassigned costs 0. A pair with c_kj ≥ 0 is never worth taking, so
+//! this is also a gate: d² < 2 ln[p_d / ((1 − p_d) λ 2π √|S|)]. The old forced assignment
+//! ([`AssignmentCost::Forced`], as many gated pairs as possible, cost −ln N) is kept for the
+//! NNF that starts the chain, as in the paper.
 
 use std::ops::RangeInclusive;
 
@@ -29,12 +47,28 @@ pub enum Assignment {
     Optimal,
 }
 
+/// What a (track, measurement) pair costs and what leaving a track without a measurement
+/// costs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AssignmentCost {
+    /// Pairs cost −ln N(z; ẑ, S) and as many gated pairs as possible are assigned (no
+    /// non-assignment option): the greedy NNF of Oh, Russell & Sastry 2009 §V.
+    Forced,
+    /// Pairs cost −ln[p_d N(z; ẑ, S) / ((1 − p_d) λ)] with λ the density of clutter plus
+    /// births; a track may stay unassigned at cost 0 (Blackman 2004's track-score
+    /// increments; see the module documentation).
+    LogLikelihoodRatio,
+}
+
 /// Settings of the nearest-neighbour trackers.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct NearestNeighbourConfig {
     /// Assignment within a scan.
     pub assignment: Assignment,
+    /// Costs, and whether a track may go without a measurement it could take.
+    pub cost: AssignmentCost,
     /// χ² gate on the innovation's squared Mahalanobis distance (2 degrees of freedom).
     pub gate: f64,
     /// M of M-of-N confirmation: a track is kept if it has ≥ M detections among the first
@@ -42,6 +76,10 @@ pub struct NearestNeighbourConfig {
     pub confirm_hits: u32,
     /// N of M-of-N confirmation.
     pub confirm_window: u32,
+    /// Deletion: the largest gap, in scans, between consecutive measurements of a track
+    /// (1 = no missed scan); a track whose next measurement would come later ends. At most
+    /// d̄ (larger values act as d̄); unset = d̄.
+    pub max_gap: Option<u32>,
 }
 
 impl NearestNeighbourConfig {
@@ -50,14 +88,16 @@ impl NearestNeighbourConfig {
     pub fn greedy_init(model: &Model) -> Self {
         Self {
             assignment: Assignment::Greedy,
+            cost: AssignmentCost::Forced,
             gate: GATE_CHI2_2D,
             confirm_hits: 2,
             confirm_window: model.max_gap() + 1,
+            max_gap: None,
         }
     }
 
-    /// Checks the gate (finite, > 0) and the confirmation rule (2 ≤ M ≤ N). Every function
-    /// that takes the configuration calls this first.
+    /// Checks the gate (finite, > 0), the confirmation rule (2 ≤ M ≤ N) and the deletion
+    /// gap (≥ 1). Every function that takes the configuration calls this first.
     pub fn check(&self) -> Result<()> {
         ensure_positive(self.gate, "gate")?;
         if self.confirm_hits < 2 || self.confirm_window < self.confirm_hits {
@@ -69,18 +109,27 @@ impl NearestNeighbourConfig {
                 ),
             ));
         }
+        if self.max_gap == Some(0) {
+            return Err(invalid_parameter(
+                "max_gap",
+                "0; consecutive measurements of a track are at least 1 scan apart".into(),
+            ));
+        }
         Ok(())
     }
 }
 
 impl Default for NearestNeighbourConfig {
-    /// GNN with a 99.9 % gate and 2-of-3 confirmation.
+    /// GNN with the log-likelihood-ratio costs, a 99.9 % gate, 2-of-3 confirmation and
+    /// deletion after d̄ missed scans.
     fn default() -> Self {
         Self {
             assignment: Assignment::Optimal,
+            cost: AssignmentCost::LogLikelihoodRatio,
             gate: GATE_CHI2_2D,
             confirm_hits: 2,
             confirm_window: 3,
+            max_gap: None,
         }
     }
 }
@@ -99,7 +148,8 @@ impl Live {
 }
 
 /// Runs a nearest-neighbour tracker over the scans `window` of `problem` and returns the
-/// confirmed tracks (measurement ids, scan-ordered), each feasible in MCMCDA's Ω.
+/// confirmed tracks (measurement ids, scan-ordered), each feasible in MCMCDA's Ω. Only the
+/// non-empty scans are visited: time does not grow with gaps in the frame numbers.
 pub fn nearest_neighbour_tracks(
     model: &Model,
     problem: &Problem,
@@ -108,12 +158,41 @@ pub fn nearest_neighbour_tracks(
 ) -> Result<Vec<Vec<MeasId>>> {
     config.check()?;
     let (lo, hi) = check_window(problem, &window)?;
-    let d_bar = problem.max_gap();
+    let max_gap = config
+        .max_gap
+        .map_or(problem.max_gap(), |g| (g as usize).min(problem.max_gap()));
+    // ln[p_d / ((1 − p_d) λ)], λ = (λ_f + λ_b) / V: the constant part of −c_kj.
+    let cfg = model.config();
+    let log_ratio = match config.cost {
+        AssignmentCost::Forced => 0.0,
+        AssignmentCost::LogLikelihoodRatio => {
+            let density = (cfg.clutter_per_scan + cfg.births_per_scan) / cfg.volume;
+            cfg.p_detect.ln() - (-cfg.p_detect).ln_1p() - density.ln()
+        }
+    };
+    let confirmed = |track: &Live| track.meas.len() as u32 >= config.confirm_hits;
     let mut live: Vec<Live> = Vec::new();
     let mut done: Vec<Vec<MeasId>> = Vec::new();
     let mut pairs: Vec<(f64, usize, usize, Node)> = Vec::new();
-    for t in lo..=hi {
-        let scan = problem.scan(t);
+    for (t, scan) in problem.nonempty_scans(lo..=hi) {
+        // Before this scan: end tracks that can no longer grow (the gap would exceed the
+        // deletion gap) and drop those that failed M-of-N (their first N scans are over).
+        let mut kept = Vec::with_capacity(live.len());
+        for track in live.drain(..) {
+            let failed = (t - track.first_scan) as u64 >= u64::from(config.confirm_window)
+                && !confirmed(&track);
+            if failed {
+                continue;
+            }
+            if t - problem.scan_of(track.last()) > max_gap {
+                if confirmed(&track) {
+                    done.push(track.meas);
+                }
+            } else {
+                kept.push(track);
+            }
+        }
+        live = kept;
         pairs.clear();
         for (k, track) in live.iter().enumerate() {
             let last = track.last();
@@ -128,14 +207,22 @@ pub fn nearest_neighbour_tracks(
                 };
                 let (next, maha) = model.step(&node, problem.position(m), gap);
                 if maha <= config.gate {
-                    let cost = node.cum_log_likelihood() - next.cum_log_likelihood();
-                    pairs.push((cost, k, j, next));
+                    // −ln N(z; ẑ, S), then the log-likelihood ratio's constant.
+                    let cost = node.cum_log_likelihood() - next.cum_log_likelihood() - log_ratio;
+                    if config.cost == AssignmentCost::Forced || cost < 0.0 {
+                        pairs.push((cost, k, j, next));
+                    }
                 }
             }
         }
-        let chosen = match config.assignment {
-            Assignment::Greedy => greedy(&mut pairs, live.len(), scan.len()),
-            Assignment::Optimal => optimal(&pairs, live.len(), scan.len())?,
+        let chosen = match (config.assignment, config.cost) {
+            (Assignment::Greedy, _) => greedy(&mut pairs, live.len(), scan.len()),
+            (Assignment::Optimal, AssignmentCost::Forced) => {
+                optimal(&pairs, live.len(), scan.len(), false)?
+            }
+            (Assignment::Optimal, AssignmentCost::LogLikelihoodRatio) => {
+                optimal(&pairs, live.len(), scan.len(), true)?
+            }
         };
         let mut used = vec![false; scan.len()];
         for &p in &chosen {
@@ -153,26 +240,9 @@ pub fn nearest_neighbour_tracks(
                 });
             }
         }
-        // Retire tracks that can no longer grow (next gap would exceed d̄) or failed M-of-N.
-        let mut kept = Vec::with_capacity(live.len());
-        for track in live.drain(..) {
-            let age = (t - track.first_scan + 1) as u32;
-            let failed =
-                age >= config.confirm_window && (track.meas.len() as u32) < config.confirm_hits;
-            let stale = t + 1 - problem.scan_of(track.last()) > d_bar;
-            if failed {
-                continue;
-            }
-            if stale || t == hi {
-                if track.meas.len() as u32 >= config.confirm_hits {
-                    done.push(track.meas);
-                }
-            } else {
-                kept.push(track);
-            }
-        }
-        live = kept;
     }
+    // The window's end: every confirmed track still alive is finished.
+    done.extend(live.into_iter().filter(confirmed).map(|t| t.meas));
     done.sort_unstable();
     Ok(done)
 }
@@ -195,27 +265,37 @@ fn greedy(pairs: &mut [(f64, usize, usize, Node)], n_tracks: usize, n_meas: usiz
     out
 }
 
-/// Minimum-cost assignment over the gated pairs (tracker-model's solver).
+/// Minimum-cost assignment over the gated pairs (tracker-model's solver). With `may_miss`,
+/// every track also has its own "no measurement" column of cost 0, so a pair is taken only
+/// if it lowers the total (the pairs' costs are then relative to leaving both unassigned);
+/// without it, as many pairs as possible are assigned.
 fn optimal(
     pairs: &[(f64, usize, usize, Node)],
     n_tracks: usize,
     n_meas: usize,
+    may_miss: bool,
 ) -> Result<Vec<usize>> {
     if pairs.is_empty() {
         return Ok(Vec::new());
     }
     // Pairs outside the gate cost more than any set of gated pairs together.
     let forbidden = 1.0 + pairs.iter().map(|p| p.0.abs()).sum::<f64>() * 2.0;
-    let mut costs = vec![forbidden; n_tracks * n_meas];
-    let mut index = vec![usize::MAX; n_tracks * n_meas];
+    let n_cols = if may_miss { n_meas + n_tracks } else { n_meas };
+    let mut costs = vec![forbidden; n_tracks * n_cols];
+    let mut index = vec![usize::MAX; n_tracks * n_cols];
     for (p, &(c, k, j, _)) in pairs.iter().enumerate() {
-        costs[k * n_meas + j] = c;
-        index[k * n_meas + j] = p;
+        costs[k * n_cols + j] = c;
+        index[k * n_cols + j] = p;
+    }
+    if may_miss {
+        for k in 0..n_tracks {
+            costs[k * n_cols + n_meas + k] = 0.0;
+        }
     }
     Ok(
-        tracker_model::assignment::minimise(n_tracks, n_meas, &costs)?
+        tracker_model::assignment::minimise(n_tracks, n_cols, &costs)?
             .into_iter()
-            .map(|(k, j)| index[k * n_meas + j])
+            .map(|(k, j)| index[k * n_cols + j])
             .filter(|&p| p != usize::MAX)
             .collect(),
     )

@@ -49,8 +49,8 @@ impl<'a> Partition<'a> {
         let (lo, hi) = check_window(problem, &window)?;
         let mut owner = vec![OUTSIDE; problem.n_measurements()];
         let mut n_in = 0usize;
-        for s in lo..=hi {
-            for &m in problem.scan(s) {
+        for (_, scan) in problem.nonempty_scans(lo..=hi) {
+            for &m in scan {
                 owner[m as usize] = FREE;
                 n_in += 1;
             }

@@ -14,7 +14,12 @@ pub type MeasId = u32;
 
 /// Measurements by scan with their forward and backward neighbourhoods.
 ///
-/// Scans are consecutive frames starting at [`Problem::first_frame`]; a scan may be empty.
+/// Scans are consecutive frames starting at [`Problem::first_frame`]: scan index s is frame
+/// `first_frame + s`, and a scan may be empty. Only the scans that hold measurements are
+/// stored (with their indices), so memory and time do not grow with gaps in the frame
+/// numbers: a frame four billion frames ahead costs no more than the next one. Empty scans
+/// still count everywhere the posterior and the proposal count scans (Oh, Russell & Sastry
+/// 2009 eq. 9 has a term for every scan a track spans, detected or not).
 /// Measurements can be added to any scan already present (late measurements), and their
 /// neighbourhood entries are added on both sides, so nothing is recomputed.
 #[derive(Debug, Clone)]
@@ -24,8 +29,12 @@ pub struct Problem {
     radius_per_scan: f64,
     positions: Vec<Vec2>,
     scan_of: Vec<u32>,
-    /// Members of each scan, by scan index (frame − first_frame).
-    scans: Vec<Vec<MeasId>>,
+    /// Number of scans, empty ones included (frame − first_frame of the last scan, plus 1).
+    n_scans: usize,
+    /// Indices of the non-empty scans, increasing.
+    held: Vec<u32>,
+    /// Members of each non-empty scan, in the order of `held`.
+    members: Vec<Vec<MeasId>>,
     /// forward[m·d̄ + d − 1] = L(y_m, t_m, d); backward likewise for scan t_m − d.
     forward: Vec<Vec<MeasId>>,
     backward: Vec<Vec<MeasId>>,
@@ -41,7 +50,9 @@ impl Problem {
             radius_per_scan: model.radius_per_scan,
             positions: Vec::new(),
             scan_of: Vec::new(),
-            scans: Vec::new(),
+            n_scans: 0,
+            held: Vec::new(),
+            members: Vec::new(),
             forward: Vec::new(),
             backward: Vec::new(),
         }
@@ -59,12 +70,12 @@ impl Problem {
         Ok(problem)
     }
 
-    /// Appends the scan at `frame` (after any empty scans needed to reach it). Returns the ids
-    /// given to `points`, in order.
+    /// Appends the scan at `frame` (frames skipped before it become empty scans, which cost
+    /// nothing to store). Returns the ids given to `points`, in order.
     pub fn push_scan(&mut self, frame: Frame, points: &[Vec2]) -> Result<Vec<MeasId>> {
-        let next = self.first_frame + self.scans.len() as Frame;
-        if frame < next {
-            return Err(if self.scans.is_empty() {
+        let next = u64::from(self.first_frame) + self.n_scans as u64;
+        if u64::from(frame) < next {
+            return Err(if self.n_scans == 0 {
                 Error::FrameBeforeFirst {
                     frame,
                     first: self.first_frame,
@@ -72,13 +83,11 @@ impl Problem {
             } else {
                 Error::FramesOutOfOrder {
                     frame,
-                    last: next - 1,
+                    last: (next - 1) as Frame,
                 }
             });
         }
-        while self.first_frame + (self.scans.len() as Frame) <= frame {
-            self.scans.push(Vec::new());
-        }
+        self.n_scans = (frame - self.first_frame) as usize + 1;
         points
             .iter()
             .map(|p| self.add_measurement(frame, *p))
@@ -96,11 +105,11 @@ impl Problem {
         let scan = frame
             .checked_sub(self.first_frame)
             .map(|s| s as usize)
-            .filter(|s| *s < self.scans.len())
+            .filter(|s| *s < self.n_scans)
             .ok_or(Error::FrameNotHeld {
                 frame,
                 first: self.first_frame,
-                end: self.first_frame + self.scans.len() as Frame,
+                end: u64::from(self.first_frame) + self.n_scans as u64,
             })?;
         let id = MeasId::try_from(self.positions.len()).map_err(|_| Error::TooManyMeasurements)?;
         self.positions.push(position);
@@ -109,24 +118,35 @@ impl Problem {
         self.forward.extend((0..d_bar).map(|_| Vec::new()));
         self.backward.extend((0..d_bar).map(|_| Vec::new()));
         for d in 1..=d_bar {
-            if let Some(later) = self.scans.get(scan + d) {
-                for &other in later {
-                    if self.within(id, other, d) {
-                        self.forward[id as usize * d_bar + d - 1].push(other);
-                        self.backward[other as usize * d_bar + d - 1].push(id);
-                    }
-                }
+            let later: Vec<MeasId> = self
+                .scan(scan + d)
+                .iter()
+                .copied()
+                .filter(|&other| self.within(id, other, d))
+                .collect();
+            for other in later {
+                self.forward[id as usize * d_bar + d - 1].push(other);
+                self.backward[other as usize * d_bar + d - 1].push(id);
             }
-            if let Some(earlier) = scan.checked_sub(d).map(|s| &self.scans[s]) {
-                for &other in earlier {
-                    if self.within(id, other, d) {
-                        self.backward[id as usize * d_bar + d - 1].push(other);
-                        self.forward[other as usize * d_bar + d - 1].push(id);
-                    }
-                }
+            let earlier: Vec<MeasId> = scan
+                .checked_sub(d)
+                .map_or(&[][..], |s| self.scan(s))
+                .iter()
+                .copied()
+                .filter(|&other| self.within(id, other, d))
+                .collect();
+            for other in earlier {
+                self.backward[id as usize * d_bar + d - 1].push(other);
+                self.forward[other as usize * d_bar + d - 1].push(id);
             }
         }
-        self.scans[scan].push(id);
+        let at = self.held.partition_point(|&s| (s as usize) < scan);
+        if self.held.get(at) == Some(&(scan as u32)) {
+            self.members[at].push(id);
+        } else {
+            self.held.insert(at, scan as u32);
+            self.members.insert(at, vec![id]);
+        }
         Ok(id)
     }
 
@@ -143,7 +163,7 @@ impl Problem {
 
     /// Number of scans.
     pub fn n_scans(&self) -> usize {
-        self.scans.len()
+        self.n_scans
     }
 
     /// Every scan index, `0..=n_scans() − 1`: the window of a whole-problem (batch) run.
@@ -161,7 +181,7 @@ impl Problem {
     /// # Ok::<(), mcmcda::Error>(())
     /// ```
     pub fn all_scans(&self) -> Result<RangeInclusive<usize>> {
-        match self.scans.len() {
+        match self.n_scans {
             0 => Err(Error::EmptyProblem),
             n => Ok(0..=n - 1),
         }
@@ -177,9 +197,32 @@ impl Problem {
         self.max_gap
     }
 
-    /// The measurements of scan index `s`.
+    /// The measurements of scan index `s` (empty for an empty scan or one past the end).
     pub fn scan(&self, s: usize) -> &[MeasId] {
-        &self.scans[s]
+        match u32::try_from(s).map(|s| self.held.binary_search(&s)) {
+            Ok(Ok(i)) => &self.members[i],
+            _ => &[],
+        }
+    }
+
+    /// The non-empty scans among the indices `window`, in increasing order, with their
+    /// measurements: what a loop over scans visits when empty scans have nothing to do.
+    pub fn nonempty_scans(
+        &self,
+        window: RangeInclusive<usize>,
+    ) -> impl Iterator<Item = (usize, &[MeasId])> + '_ {
+        let (lo, hi) = (*window.start(), *window.end());
+        let from = self.held.partition_point(|&s| (s as usize) < lo);
+        self.held[from..]
+            .iter()
+            .zip(&self.members[from..])
+            .map(|(&s, m)| (s as usize, m.as_slice()))
+            .take_while(move |(s, _)| *s <= hi)
+    }
+
+    /// Whether `m` is a measurement of this problem.
+    pub fn contains(&self, m: MeasId) -> bool {
+        (m as usize) < self.positions.len()
     }
 
     /// Position of a measurement.

@@ -77,9 +77,9 @@ pub fn log_posterior_by_counts(
             // Σ over when the target disappeared unseen, or that it survived unseen.
             let s = (1.0 - cfg.p_disappear) * (1.0 - cfg.p_detect);
             let p: f64 = (0..remaining)
-                .map(|j| s.powi(j as i32) * cfg.p_disappear)
+                .map(|j| s.powf(j as f64) * cfg.p_disappear)
                 .sum::<f64>()
-                + s.powi(remaining as i32);
+                + s.powf(remaining as f64);
             lp += p.ln();
         }
         if let TrackInit::TwoPoint { .. } = cfg.track_init {

@@ -132,7 +132,7 @@ impl Pipeline for Online {
         };
         let (ospa_series, count_est, count_true) = step_series(&steps, &sim.truth, &cfg)?;
         let tracks: Vec<Vec<u32>> = result.associations.iter().map(|(_, t)| t.clone()).collect();
-        let labels = measurement_labels(&result.problem, &tracks);
+        let labels = measurement_labels(&result.problem, &tracks)?;
         let scores = association_scores(&sim.scans, &labels)?;
         let final_ospa = eval_metrics::ospa_over_time(&sim.truth, &result.tracks, &cfg)?;
         let mean_ospa_smoothed = final_ospa.iter().map(|(_, o)| o.distance).sum::<f64>()
