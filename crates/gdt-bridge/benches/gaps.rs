@@ -1,4 +1,5 @@
-//! 1000 gaps of 20 missing steps each, recovered by GDT and by the natural cubic spline.
+//! 1000 gaps of 21 missing frames each (segments of 10 observations at frames 0-9 and 31-40),
+//! recovered by GDT and by the natural cubic spline.
 #![expect(clippy::unwrap_used, reason = "benchmarks run on fixed, valid inputs")]
 
 use std::hint::black_box;
@@ -33,14 +34,14 @@ fn bench_gaps(c: &mut Criterion) {
         21
     );
     let model = GdtConfig::default().check().unwrap();
-    c.bench_function("gdt_1000_gaps_of_20_steps", |b| {
+    c.bench_function("gdt_1000_gaps_of_21_frames", |b| {
         b.iter(|| {
             gaps.iter()
                 .map(|(a, z)| recover_gdt(black_box(a), black_box(z), &model).unwrap())
                 .collect::<Vec<_>>()
         })
     });
-    c.bench_function("natural_spline_1000_gaps_of_20_steps", |b| {
+    c.bench_function("natural_spline_1000_gaps_of_21_frames", |b| {
         b.iter(|| {
             gaps.iter()
                 .map(|(a, z)| {

@@ -84,8 +84,28 @@ pub enum Error {
         /// The time before it.
         last: f64,
     },
-    /// The least-squares B-spline's design matrix is rank deficient (knot spans without data).
-    #[error("the B-spline design matrix is rank deficient (knots without data)")]
+    /// A sample time outside the spline's base interval [t_3, t_n].
+    #[error("sample time {time} lies outside the knots' base interval [{lower}, {upper}]")]
+    SampleOutsideKnots {
+        /// The sample time.
+        time: f64,
+        /// t_3.
+        lower: f64,
+        /// t_n.
+        upper: f64,
+    },
+    /// A gap longer than [`MAX_GAP_FRAMES`](crate::MAX_GAP_FRAMES): recovering it would
+    /// allocate a position per missing frame.
+    #[error("{frames} missing frames between segments: at most {max} can be recovered")]
+    GapTooLong {
+        /// Missing frames.
+        frames: u64,
+        /// The limit.
+        max: u32,
+    },
+    /// A least-squares or smoothing spline fit whose system is singular: for a B-spline, knot
+    /// spans without data (the Schoenberg-Whitney condition fails).
+    #[error("the spline fit is rank deficient (knots without data)")]
     RankDeficientFit,
     /// Model and noise sequences of different lengths, or no step at all.
     #[error(

@@ -8,7 +8,10 @@ use tracker_model::{
     ensure_non_negative, ensure_positive, position_measurement,
 };
 
-use crate::baselines::{BSplineConfig, linear, lsq_bspline, natural_cubic_spline};
+use crate::baselines::{
+    BSpline, BSplineConfig, GcvConfig, SmoothingSpline, gap_knots, linear, lsq_bspline,
+    natural_cubic_spline,
+};
 use crate::error::{Error, Result};
 use crate::goal::{Goal, GoalDirected};
 use crate::link::end_state;
@@ -134,6 +137,11 @@ fn check_segment(segment: &[Observation]) -> Result<()> {
     }
 }
 
+/// The longest gap any recovery accepts: 2²⁰ frames (about 41 hours at 7 fps). A recovery
+/// returns a position per missing frame, so a longer gap (for instance a frame number near
+/// `u32::MAX` in B) is refused with [`Error::GapTooLong`] rather than allocated.
+pub const MAX_GAP_FRAMES: u32 = 1 << 20;
+
 /// Checks the two segments and returns the missing frames between them.
 fn missing_frames(a: &[Observation], b: &[Observation]) -> Result<Vec<Frame>> {
     let (Some(last_a), Some(first_b)) = (a.last(), b.first()) else {
@@ -142,10 +150,18 @@ fn missing_frames(a: &[Observation], b: &[Observation]) -> Result<Vec<Frame>> {
     for seg in [a, b] {
         check_segment(seg)?;
     }
-    if first_b.frame <= last_a.frame + 1 {
+    // Compared without `last_a + 1`, which overflows at u32::MAX.
+    if first_b.frame <= last_a.frame || first_b.frame - last_a.frame < 2 {
         return Err(Error::NoGap {
             last_a: last_a.frame,
             first_b: first_b.frame,
+        });
+    }
+    let n_missing = first_b.frame - last_a.frame - 1;
+    if n_missing > MAX_GAP_FRAMES {
+        return Err(Error::GapTooLong {
+            frames: u64::from(n_missing),
+            max: MAX_GAP_FRAMES,
         });
     }
     Ok((last_a.frame + 1..first_b.frame).collect())
@@ -239,16 +255,237 @@ fn recover_with_goal<const M: usize>(
     })
 }
 
-/// The interpolation baselines.
+/// The interpolation baselines. Their tuning (λ, the window) is chosen per gap from the
+/// observed frames only, never from the hidden positions.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum Baseline {
     /// A straight line from A's last to B's first observation.
     Linear,
-    /// A natural cubic spline through every observation of both segments.
+    /// A natural cubic spline through every observation of both segments (a knot at every
+    /// observation; it interpolates the noise).
     NaturalCubicSpline,
-    /// A least-squares cubic B-spline over both segments (unit weights).
+    /// A least-squares cubic B-spline over both segments (unit weights) on Oh & Jung's knot
+    /// rule, [`gap_knots`].
     LeastSquaresBSpline(BSplineConfig),
+    /// The cubic smoothing spline over every observation of both segments, per axis, with λ
+    /// chosen by generalized cross-validation ([`SmoothingSpline::fit_gcv`]).
+    SmoothingSpline(GcvConfig),
+    /// A least-squares cubic polynomial through the last n observations of A and the first n
+    /// of B, per axis, n chosen by cross-validation on the observations ([`WindowConfig`]).
+    WindowCubic(WindowConfig),
+    /// A least-squares cubic B-spline on the last n observations of A and the first n of B,
+    /// per axis, with clamped knots at the window's ends and two interior knots at A's last
+    /// and B's first frame (so the gap is one cubic piece joined C² to one piece per side);
+    /// n chosen by cross-validation ([`WindowConfig`]).
+    WindowBSpline(WindowConfig),
+}
+
+/// The window sizes the window fits choose from, per gap, by cross-validation on the
+/// observations. Pseudo-gaps of the real gap's length L are cut inside each segment (every
+/// ⌈L/2⌉ observations, wherever at least the fit's minimum is left on both sides); each
+/// candidate n is fitted to the n observations before and after each pseudo-gap (fewer where
+/// the segment ends) and scored by its squared error on the hidden observations, summed over
+/// all pseudo-gaps; the least wins (ties: the earlier candidate). When neither segment is long
+/// enough for a pseudo-gap, the ⌈L/2⌉ observations of each segment nearest the gap are held
+/// out instead, and when that is impossible too, the first usable candidate is taken.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct WindowConfig {
+    /// Candidate numbers of observations per side.
+    pub candidates: Vec<usize>,
+}
+
+impl Default for WindowConfig {
+    fn default() -> Self {
+        Self {
+            candidates: vec![3, 4, 5, 6, 8, 10, 12, 15, 20, 25, 30, 40, 50, 70, 100],
+        }
+    }
+}
+
+/// Which window fit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum WindowKind {
+    Cubic,
+    BSpline,
+}
+
+impl WindowKind {
+    /// The fewest observations per side for which the fit is determined (Schoenberg-Whitney):
+    /// the B-spline's 6 coefficients need 3 per side, the cubic's 4 need 2.
+    fn min_per_side(self) -> usize {
+        match self {
+            WindowKind::Cubic => 2,
+            WindowKind::BSpline => 3,
+        }
+    }
+}
+
+/// Fits a window of `n` observations per side and predicts both axes at `at`.
+fn window_predict(
+    a: &[Observation],
+    b: &[Observation],
+    n: usize,
+    kind: WindowKind,
+    at: &[f64],
+) -> Result<[Vec<f64>; 2]> {
+    let wa = &a[a.len().saturating_sub(n)..];
+    let wb = &b[..n.min(b.len())];
+    let (Some(first), Some(last_a), Some(first_b), Some(last)) =
+        (wa.first(), wa.last(), wb.first(), wb.last())
+    else {
+        return Err(Error::SegmentTooShort { len: 0, min: 1 });
+    };
+    let (t0, t1) = (f64::from(first.frame), f64::from(last.frame));
+    let mut knots = vec![t0; 4];
+    if kind == WindowKind::BSpline {
+        knots.extend([f64::from(last_a.frame), f64::from(first_b.frame)]);
+    }
+    knots.extend([t1; 4]);
+    let samples: Vec<&Observation> = wa.iter().chain(wb).collect();
+    let times: Vec<f64> = samples.iter().map(|o| f64::from(o.frame)).collect();
+    let weights = vec![1.0; times.len()];
+    let axis = |k: usize| -> Result<Vec<f64>> {
+        let values: Vec<f64> = samples.iter().map(|o| o.position[k]).collect();
+        let spline = BSpline::fit_lsq(&times, &values, &weights, &knots)?;
+        Ok(at.iter().map(|&x| spline.value(x)).collect())
+    };
+    Ok([axis(0)?, axis(1)?])
+}
+
+/// The cross-validation folds of a gap of `n_missing` frames (see [`WindowConfig`]).
+fn cv_folds<'a>(
+    a: &'a [Observation],
+    b: &'a [Observation],
+    n_missing: usize,
+    min: usize,
+) -> Vec<Fold<'a>> {
+    let mut folds: Vec<Fold<'a>> = Vec::new();
+    let len = n_missing.max(1);
+    let stride = len.div_ceil(2);
+    // Pseudo-gaps of the same length inside each segment.
+    for seg in [a, b] {
+        let mut start = min;
+        while start + len + min <= seg.len() {
+            let (before, rest) = seg.split_at(start);
+            let (hidden, after) = rest.split_at(len);
+            folds.push((before, hidden, &hidden[..0], after));
+            start += stride;
+        }
+    }
+    if folds.is_empty() {
+        // Hold out the observations nearest the real gap instead.
+        let hold = len
+            .div_ceil(2)
+            .min(a.len().saturating_sub(min))
+            .min(b.len().saturating_sub(min));
+        if hold > 0 {
+            let (fit_a, held_a) = a.split_at(a.len() - hold);
+            let (held_b, fit_b) = b.split_at(hold);
+            folds.push((fit_a, held_a, held_b, fit_b));
+        }
+    }
+    folds
+}
+
+/// A cross-validation fold: observations fitted before, held out (in one or two runs), fitted
+/// after.
+type Fold<'a> = (
+    &'a [Observation],
+    &'a [Observation],
+    &'a [Observation],
+    &'a [Observation],
+);
+
+/// The cross-validation error of each candidate window of a window fit (`method` must be
+/// [`Baseline::WindowCubic`] or [`Baseline::WindowBSpline`]) on the gap between `a` and `b`:
+/// the Euclidean error (the error the recovery is judged by) summed over the held-out
+/// observations of every fold (see [`WindowConfig`]), `None` for a candidate too small for the
+/// fit or that some fold's data cannot determine. All zero when there is no fold. Summing
+/// these over the gaps of a scene chooses one window for the scene from its observations.
+pub fn window_cv_errors(
+    a: &[Observation],
+    b: &[Observation],
+    method: &Baseline,
+) -> Result<Vec<Option<f64>>> {
+    let (kind, config) = match method {
+        Baseline::WindowCubic(config) => (WindowKind::Cubic, config),
+        Baseline::WindowBSpline(config) => (WindowKind::BSpline, config),
+        _ => {
+            return Err(Error::InvalidParameter {
+                name: "method",
+                reason: format!("{method:?} has no window to cross-validate"),
+            });
+        }
+    };
+    let frames = missing_frames(a, b)?;
+    Ok(cv_errors(a, b, frames.len(), kind, config))
+}
+
+/// [`window_cv_errors`] for a checked gap.
+fn cv_errors(
+    a: &[Observation],
+    b: &[Observation],
+    n_missing: usize,
+    kind: WindowKind,
+    config: &WindowConfig,
+) -> Vec<Option<f64>> {
+    let min = kind.min_per_side();
+    let folds = cv_folds(a, b, n_missing, min);
+    config
+        .candidates
+        .iter()
+        .map(|&n| {
+            if n < min {
+                return None;
+            }
+            let mut total = 0.0;
+            for (before, held_1, held_2, after) in &folds {
+                let held: Vec<&Observation> = held_1.iter().chain(held_2.iter()).collect();
+                let at: Vec<f64> = held.iter().map(|o| f64::from(o.frame)).collect();
+                let [xs, ys] = window_predict(before, after, n, kind, &at).ok()?;
+                total += held
+                    .iter()
+                    .zip(xs.iter().zip(&ys))
+                    .map(|(o, (x, y))| (o.position.x - x).hypot(o.position.y - y))
+                    .sum::<f64>();
+            }
+            Some(total)
+        })
+        .collect()
+}
+
+/// The window size cross-validation picks for a gap of `n_missing` frames (see
+/// [`WindowConfig`]): the candidate with the least error (ties: the earlier one), the first
+/// usable candidate when there is no fold.
+fn choose_window(
+    a: &[Observation],
+    b: &[Observation],
+    n_missing: usize,
+    kind: WindowKind,
+    config: &WindowConfig,
+) -> Result<usize> {
+    let min = kind.min_per_side();
+    if !config.candidates.iter().any(|&n| n >= min) {
+        return Err(Error::InvalidParameter {
+            name: "candidates",
+            reason: format!(
+                "{:?}: the window fit needs a candidate of at least {min} observations per side",
+                config.candidates
+            ),
+        });
+    }
+    let errors = cv_errors(a, b, n_missing, kind, config);
+    let mut best: Option<(usize, f64)> = None;
+    for (&n, e) in config.candidates.iter().zip(errors) {
+        if let Some(e) = e
+            && best.is_none_or(|(_, b)| e < b)
+        {
+            best = Some((n, e));
+        }
+    }
+    best.map(|(n, _)| n).ok_or(Error::RankDeficientFit)
 }
 
 /// Recovers the gap with a baseline, per coordinate.
@@ -261,25 +498,37 @@ pub fn recover_baseline(
     let samples: Vec<&Observation> = a.iter().chain(b).collect();
     let times: Vec<f64> = samples.iter().map(|o| f64::from(o.frame)).collect();
     let at: Vec<f64> = frames.iter().map(|&f| f64::from(f)).collect();
-    let coordinate = |axis: usize| -> Result<Vec<f64>> {
-        let values: Vec<f64> = samples.iter().map(|o| o.position[axis]).collect();
-        match method {
-            Baseline::Linear => {
-                let (la, fb) = (a[a.len() - 1], b[0]);
-                linear(
-                    &[f64::from(la.frame), f64::from(fb.frame)],
-                    &[la.position[axis], fb.position[axis]],
-                    &at,
-                )
-            }
-            Baseline::NaturalCubicSpline => natural_cubic_spline(&times, &values, &at),
-            Baseline::LeastSquaresBSpline(cfg) => {
-                let gap = (f64::from(a[a.len() - 1].frame), f64::from(b[0].frame));
-                lsq_bspline(&times, &values, &vec![1.0; times.len()], gap, cfg, &at)
-            }
+    let values = |axis: usize| -> Vec<f64> { samples.iter().map(|o| o.position[axis]).collect() };
+    let per_axis = |fit: &dyn Fn(&[f64]) -> Result<Vec<f64>>| -> Result<[Vec<f64>; 2]> {
+        Ok([fit(&values(0))?, fit(&values(1))?])
+    };
+    let [xs, ys] = match method {
+        Baseline::Linear => {
+            let (la, fb) = (a[a.len() - 1], b[0]);
+            let ends = [f64::from(la.frame), f64::from(fb.frame)];
+            let axis = |k: usize| linear(&ends, &[la.position[k], fb.position[k]], &at);
+            [axis(0)?, axis(1)?]
+        }
+        Baseline::NaturalCubicSpline => per_axis(&|v| natural_cubic_spline(&times, v, &at))?,
+        Baseline::LeastSquaresBSpline(cfg) => {
+            let gap = (f64::from(a[a.len() - 1].frame), f64::from(b[0].frame));
+            let knots = gap_knots(&times, gap, cfg.interior_knots_per_side);
+            let weights = vec![1.0; times.len()];
+            per_axis(&|v| lsq_bspline(&times, v, &weights, &knots, &at))?
+        }
+        Baseline::SmoothingSpline(cfg) => per_axis(&|v| {
+            let spline = SmoothingSpline::fit_gcv(&times, v, cfg)?;
+            Ok(at.iter().map(|&x| spline.value(x)).collect())
+        })?,
+        Baseline::WindowCubic(cfg) => {
+            let n = choose_window(a, b, frames.len(), WindowKind::Cubic, cfg)?;
+            window_predict(a, b, n, WindowKind::Cubic, &at)?
+        }
+        Baseline::WindowBSpline(cfg) => {
+            let n = choose_window(a, b, frames.len(), WindowKind::BSpline, cfg)?;
+            window_predict(a, b, n, WindowKind::BSpline, &at)?
         }
     };
-    let (xs, ys) = (coordinate(0)?, coordinate(1)?);
     Ok(RecoveredGap {
         frames,
         positions: xs

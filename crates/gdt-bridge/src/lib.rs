@@ -10,7 +10,11 @@
 //!   each step's transition, drift offset and reduced noise, and the conditional initial state;
 //! * [`recover_gdt`]: gap recovery from segments A and B with a constant-velocity model, and
 //!   [`recover_gdt_goal_state`], whose goal is B's full state from a backward filter;
-//! * baselines [`linear`], [`natural_cubic_spline`], [`lsq_bspline`] and [`recover_baseline`];
+//! * [`estimate_noise`]: the measurement variance and process noise by maximum likelihood over
+//!   the observed frames of the segments, so GDT needs no oracle noise;
+//! * baselines [`linear`], [`natural_cubic_spline`], [`lsq_bspline`] (explicit knots and
+//!   weights, banded, O(n)), the GCV [`SmoothingSpline`], and [`recover_baseline`] with window
+//!   fits whose size is cross-validated on the observations;
 //! * segment linking ([`link_segments`]): gated goal-directed likelihood costs and an optimal
 //!   one-to-one assignment;
 //! * Oh & Jung's evaluation protocol: [`gaps_from_mask`] turns masked crossings into gaps.
@@ -54,17 +58,22 @@ mod error;
 mod gap;
 mod goal;
 mod link;
+mod noise;
 mod protocol;
 
 #[cfg(test)]
 mod tests;
 
-pub use baselines::{BSplineConfig, linear, lsq_bspline, natural_cubic_spline};
+pub use baselines::{
+    BSpline, BSplineConfig, GcvConfig, SmoothingSpline, gap_knots, linear, lsq_bspline,
+    natural_cubic_spline,
+};
 pub use error::{Error, Result};
 pub use gap::{
-    Baseline, GdtConfig, GdtModel, Observation, RecoveredGap, recover_baseline, recover_gdt,
-    recover_gdt_goal_state,
+    Baseline, GdtConfig, GdtModel, MAX_GAP_FRAMES, Observation, RecoveredGap, WindowConfig,
+    recover_baseline, recover_gdt, recover_gdt_goal_state, window_cv_errors,
 };
 pub use goal::{Goal, GoalDirected, GoalStep, Moments};
 pub use link::{Link, LinkConfig, LinkModel, link_costs, link_segments};
+pub use noise::{NoiseEstimate, NoiseSearch, estimate_noise, noise_log_likelihood};
 pub use protocol::{GapCase, gaps_from_mask};

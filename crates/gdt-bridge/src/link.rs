@@ -8,10 +8,11 @@
 //! crate) keeps the pairs whose cost beats starting a new track.
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{Gaussian, ObservationModel, TransitionModel, ensure_positive, filter};
+use tracker_model::{Gaussian, ObservationModel, TransitionModel, ensure_positive};
 
 use crate::error::{Error, Result};
-use crate::gap::{GdtConfig, GdtModel, Observation, check_frames};
+use crate::gap::{GdtConfig, GdtModel, Observation};
+use crate::noise::filter_segment;
 
 /// Linking settings; [`LinkConfig::check`] turns them into the [`LinkModel`] that
 /// [`link_costs`] and [`link_segments`] take.
@@ -83,30 +84,10 @@ pub struct Link {
     pub cost: f64,
 }
 
-/// Filters a segment and returns its state at its last frame.
+/// Filters a segment and returns its state at its last frame (work and memory proportional to
+/// its observations, whatever frames they span).
 pub(crate) fn end_state(segment: &[Observation], model: &GdtModel) -> Result<Gaussian<4>> {
-    // Two observations are the least that determine a velocity.
-    let (first, last) = match segment {
-        [first, .., last] => (*first, *last),
-        _ => {
-            return Err(Error::SegmentTooShort {
-                len: segment.len(),
-                min: 2,
-            });
-        }
-    };
-    check_frames(segment)?;
-    let prior = model.prior(first.position)?;
-    let mut zs = vec![None; (last.frame - first.frame + 1) as usize];
-    for o in segment {
-        zs[(o.frame - first.frame) as usize] = Some(o.position);
-    }
-    let mut run = filter(model.motion(), model.sensor(), &prior, &zs)?;
-    let end = run
-        .steps
-        .pop()
-        .expect("the filter makes one step per frame, and a segment spans at least two");
-    Ok(end.filtered)
+    filter_segment(segment, model).map(|run| run.end)
 }
 
 /// The cost of every gated (A, B) pair, as (from, to, cost).

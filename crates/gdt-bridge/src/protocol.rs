@@ -3,7 +3,7 @@
 //! from the observations before and after it.
 
 use serde::{Deserialize, Serialize};
-use tracker_model::{Region2, TrackId, TrackSet};
+use tracker_model::{Frame, Region2, TrackId, TrackSet};
 
 use crate::gap::Observation;
 
@@ -20,6 +20,11 @@ pub struct GapCase {
     pub hidden: Vec<Observation>,
     /// Observations outside the mask after the crossing (until the next crossing).
     pub after: Vec<Observation>,
+}
+
+/// Whether frame `next` comes right after `frame` (`frame + 1` would overflow at u32::MAX).
+fn follows(frame: Frame, next: Frame) -> bool {
+    frame.checked_add(1) == Some(next)
 }
 
 /// Cuts every truth trajectory at the mask. A run of consecutive frames inside the mask is a
@@ -42,7 +47,7 @@ pub fn gaps_from_mask(truth: &TrackSet, mask: &Region2) -> Vec<GapCase> {
         // Runs as (start, end) index ranges, alternating outside / inside.
         let mut runs: Vec<(usize, usize, bool)> = Vec::new();
         for (k, &flag) in inside.iter().enumerate() {
-            let contiguous = k > 0 && pts[k].frame == pts[k - 1].frame + 1;
+            let contiguous = k > 0 && follows(pts[k - 1].frame, pts[k].frame);
             match runs.last_mut() {
                 Some(run) if run.2 == flag && contiguous => run.1 = k + 1,
                 _ => runs.push((k, k + 1, flag)),
@@ -51,8 +56,8 @@ pub fn gaps_from_mask(truth: &TrackSet, mask: &Region2) -> Vec<GapCase> {
         let mut crossing = 0;
         for r in 1..runs.len().saturating_sub(1) {
             let (prev, cur, next) = (runs[r - 1], runs[r], runs[r + 1]);
-            let frames_join = pts[cur.0].frame == pts[prev.1 - 1].frame + 1
-                && pts[next.0].frame == pts[cur.1 - 1].frame + 1;
+            let frames_join = follows(pts[prev.1 - 1].frame, pts[cur.0].frame)
+                && follows(pts[cur.1 - 1].frame, pts[next.0].frame);
             if cur.2 && !prev.2 && !next.2 && frames_join {
                 out.push(GapCase {
                     truth_id: track.id(),
