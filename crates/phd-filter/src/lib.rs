@@ -11,8 +11,9 @@
 //! * [`PhdTracker`]: their loop (local detections, fusion, filter, detector management), or
 //!   the filter alone on the global detections ([`PhdTracker::global_only`]);
 //! * [`scene`]: simulated pedestrian scenes with a global detector that misses and fires
-//!   falsely, and local detectors with their own failures, behind
-//!   [`tracker_model::LocalDetector`].
+//!   falsely, and local detectors behind [`tracker_model::LocalDetector`] that see only the
+//!   people inside their search window (never the truth's identities), with their own miss
+//!   rate, box noise, occlusion, drift to a neighbour, and clutter templates.
 //!
 //! Configurations are checked when a filter or tracker is built ([`PhdConfig::check`],
 //! [`GmConfig::check`], [`FusionConfig::check`]) and trusted afterwards.

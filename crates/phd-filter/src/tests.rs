@@ -180,41 +180,55 @@ impl LocalDetector for Fixed {
 
 #[test]
 fn detectors_are_confirmed_at_iou_half_and_removed_at_one_tenth() {
-    let config = FusionConfig::default();
+    // p_D = 0.75, p_FA = 0.25 keep every step of eqs. 9-10 exact in binary, so the removal
+    // boundary (confidence ≤ 0.1) has one answer. By hand, from P₀ = 0.5:
+    // unconfirmed: 0.25·0.5 / (0.25·0.5 + 0.75·0.5) = 0.125 / 0.5 = 0.25, then
+    // 0.25·0.25 / (0.0625 + 0.75·0.75) = 0.0625 / 0.625 = 0.1 (the double nearest 0.1, as the
+    // literal; division is correctly rounded), so the detector goes at its second unconfirmed
+    // frame, not its first; confirmed: 0.75·0.5 / (0.375 + 0.125) = 0.75.
+    let config = FusionConfig {
+        p_detect: 0.75,
+        p_false_alarm: 0.25,
+        ..FusionConfig::default()
+    };
+    assert_eq!(config.initial_confidence, 0.5);
+    assert_eq!(config.removal_confidence, 0.1);
     let mut bank = DetectorBank::default();
     let a = bx(0.0, 0.0, 10.0, 20.0);
     let b = bx(200.0, 0.0, 10.0, 20.0);
     bank.add(1, Box::new(Fixed(a)), a, &config);
     bank.add(2, Box::new(Fixed(b)), b, &config);
-    // Global box overlapping `a` with IoU exactly 0.5 confirms it (eq. 9 needs ≥ 0.5);
+    // A global box overlapping `a` with IoU exactly 0.5 confirms it (eq. 9 needs ≥ 0.5);
     // nothing confirms `b`.
     let global = [bx(0.0, 0.0, 10.0, 10.0)];
     let found = bank.detect(0);
     assert_eq!(found.len(), 2);
     let removed = bank.update_confidence(&found, &global, &config);
     assert!(removed.is_empty());
-    assert_eq!(
-        bank.detectors()[0].confidence,
-        updated_confidence(0.5, true, &config)
-    );
+    assert_eq!(bank.detectors()[0].confidence, 0.75);
     assert_eq!(bank.detectors()[1].confidence, 0.25);
-    // Unconfirmed again: 0.25 → 0.075 / (0.075 + 0.675) = 0.1 (up to rounding), then
-    // 0.1 → 0.03 / (0.03 + 0.81) ≈ 0.036 ≤ 0.1: removed.
     let found = bank.detect(1);
-    bank.update_confidence(&found, &global, &config);
-    let c = bank
-        .detectors()
-        .iter()
-        .find(|d| d.label == 2)
-        .map(|d| d.confidence);
-    assert!(
-        c.is_none() || (c.unwrap_or(0.0) - 0.1).abs() < 1e-12,
-        "{c:?}"
+    let removed = bank.update_confidence(&found, &global, &config);
+    assert_eq!(
+        removed,
+        vec![2],
+        "removed at exactly 0.1 on the second miss"
     );
-    let found = bank.detect(2);
-    bank.update_confidence(&found, &global, &config);
-    assert!(!bank.has(2));
     assert!(bank.has(1));
+    // Just below the boundary it survives that frame with confidence 0.1 and goes at the third.
+    let below = FusionConfig {
+        removal_confidence: 0.1f64.next_down(),
+        ..config
+    };
+    let mut bank = DetectorBank::default();
+    bank.add(2, Box::new(Fixed(b)), b, &below);
+    for frame in 0..2 {
+        let found = bank.detect(frame);
+        assert!(bank.update_confidence(&found, &global, &below).is_empty());
+    }
+    assert_eq!(bank.detectors()[0].confidence, 0.1);
+    let found = bank.detect(2);
+    assert_eq!(bank.update_confidence(&found, &global, &below), vec![2]);
 }
 
 #[test]
@@ -396,13 +410,22 @@ fn bad_settings_are_errors_that_name_the_parameter() {
     assert_eq!(
         named(
             LocalDetectorSim {
-                p_lost: 0.7,
-                p_relock: 0.5,
+                p_drift: 1.5,
                 ..LocalDetectorSim::default()
             }
             .check()
         ),
-        "p_lost"
+        "p_drift"
+    );
+    assert_eq!(
+        named(
+            LocalDetectorSim {
+                search: 0.0,
+                ..LocalDetectorSim::default()
+            }
+            .check()
+        ),
+        "search"
     );
     assert!(SceneConfig::default().check().is_ok());
     assert!(SceneConfig::pets_like().check().is_ok());
@@ -432,4 +455,226 @@ fn local_detectors_that_find_nothing_change_nothing() {
     }
     assert_eq!(alone.tracks().unwrap(), with_local.tracks().unwrap());
     assert_eq!(alone.tracks().unwrap().len(), 3);
+}
+
+/// The simulated local detectors of `scene.rs`: they see only what is inside their window and
+/// fail at the rates their configuration states. Rates are checked against a binomial bound of
+/// 4 standard deviations (a correct simulator fails one in ~16,000 seeds; the seeds are fixed).
+mod simulated_detectors {
+    use std::collections::BTreeMap;
+    use std::sync::Arc;
+
+    use tracker_model::{BoundingBox, Frame, LocalDetector, LocalDetectorFactory, TrackId};
+
+    use super::bx;
+    use crate::fusion::{DetectorBank, FusionConfig};
+    use crate::scene::{FrameTruth, LocalDetectorSim, SimulatedDetectors, Template};
+
+    /// A detector that always finds what it looks for, exactly, and reports nothing else.
+    fn perfect() -> LocalDetectorSim {
+        LocalDetectorSim {
+            search: 0.5,
+            p_detect: 1.0,
+            p_detect_occluded: 1.0,
+            occlusion: 0.5,
+            noise: 0.0,
+            noise_occluded: 0.0,
+            p_drift: 0.0,
+            p_stale: 0.0,
+            spawn_iou: 0.3,
+        }
+    }
+
+    /// The same people (id, box, hidden fraction) in frames 0..n.
+    fn still(n: u32, people: &[(u64, BoundingBox, f64)]) -> Arc<BTreeMap<Frame, FrameTruth>> {
+        let frame: FrameTruth = people.iter().map(|&(i, b, h)| (TrackId(i), b, h)).collect();
+        Arc::new((0..n).map(|f| (f, frame.clone())).collect())
+    }
+
+    /// Whether k successes in n trials fit probability p within 4 standard deviations.
+    fn binomial_ok(k: usize, n: usize, p: f64) -> bool {
+        let (k, n) = (k as f64, n as f64);
+        (k - n * p).abs() <= 4.0 * (n * p * (1.0 - p)).sqrt()
+    }
+
+    const A: BoundingBox = BoundingBox {
+        left: 100.0,
+        top: 200.0,
+        width: 40.0,
+        height: 100.0,
+    };
+
+    #[test]
+    fn never_fires_for_a_person_outside_its_window() {
+        let n = 2000;
+        // Spawned on A at frame 0; from frame 1 on A stands 300 px to the right, far outside
+        // the window (centre of `around` ± 50 px), and the detector is asked around A's old box.
+        let far = bx(400.0, 200.0, 40.0, 100.0);
+        let mut frames: BTreeMap<Frame, FrameTruth> = BTreeMap::new();
+        frames.insert(0, vec![(TrackId(0), A, 0.0)]);
+        for f in 1..=n {
+            frames.insert(f, vec![(TrackId(0), far, 0.0)]);
+        }
+        let config = LocalDetectorSim {
+            p_stale: 0.3,
+            noise: 0.04,
+            ..perfect()
+        };
+        let mut factory = SimulatedDetectors::over(Arc::new(frames), config, 5).unwrap();
+        let mut d = factory.detector(0, &A);
+        assert_eq!(d.template(), Template::Person(TrackId(0)));
+        assert!(d.detect(0, &A).is_some_and(|b| b.iou(&A) > 0.3));
+        let mut stale = 0;
+        for f in 1..=n {
+            if let Some(b) = d.detect(f, &A) {
+                stale += 1;
+                assert_eq!(b.intersection_area(&far), 0.0, "frame {f}: {b:?} reaches A");
+            }
+        }
+        // What it does report there is its stale response, at the stated rate.
+        assert!(binomial_ok(stale, n as usize, 0.3), "{stale} stale of {n}");
+        // The same detector asked around A's new place finds A every time.
+        assert!((1..=100).all(|f| d.detect(f, &far).is_some_and(|b| b.iou(&far) > 0.3)));
+    }
+
+    #[test]
+    fn misses_and_box_noise_at_the_stated_rates() {
+        let n = 5000;
+        for (hidden, p, noise) in [(0.2, 0.8, 0.04), (0.7, 0.3, 0.08)] {
+            let config = LocalDetectorSim {
+                p_detect: 0.8,
+                p_detect_occluded: 0.3,
+                noise: 0.04,
+                noise_occluded: 0.08,
+                ..perfect()
+            };
+            let content = still(n, &[(3, A, hidden)]);
+            let mut d = SimulatedDetectors::over(content, config, 11)
+                .unwrap()
+                .detector(0, &A);
+            let errors: Vec<f64> = (0..n)
+                .filter_map(|f| d.detect(f, &A))
+                .map(|b| b.left - A.left)
+                .collect();
+            assert!(
+                binomial_ok(errors.len(), n as usize, p),
+                "hidden {hidden}: found {} of {n}, stated rate {p}",
+                errors.len()
+            );
+            // The left edge's error has standard deviation noise × height; the sample's
+            // relative standard error is 1/√(2m) ≈ 2-3 %, the bound 4 of those.
+            let m = errors.len() as f64;
+            let sd = (errors.iter().map(|e| e * e).sum::<f64>() / m).sqrt();
+            let expected = noise * A.height;
+            assert!(
+                (sd / expected - 1.0).abs() < 4.0 / (2.0 * m).sqrt(),
+                "hidden {hidden}: box noise {sd}, stated {expected}"
+            );
+        }
+    }
+
+    #[test]
+    fn drifts_to_a_close_neighbour_at_the_stated_rate() {
+        let n = 5000;
+        // B's centre is 20 px from A's: each is inside the other's window.
+        let b = bx(120.0, 200.0, 40.0, 100.0);
+        for p_drift in [0.0, 0.1] {
+            let config = LocalDetectorSim {
+                p_drift,
+                ..perfect()
+            };
+            let content = still(n, &[(0, A, 0.0), (1, b, 0.0)]);
+            let mut factory = SimulatedDetectors::over(content, config, 17).unwrap();
+            let stats = factory.stats();
+            let mut d = factory.detector(0, &A);
+            assert_eq!(d.template(), Template::Person(TrackId(0)));
+            let mut around = A;
+            let mut switches = 0;
+            for f in 0..n {
+                let before = d.template();
+                let found = d.detect(f, &around).unwrap();
+                // Noise 0: the report is exactly the box of whoever it now follows.
+                let now = if found == A { 0 } else { 1 };
+                assert!(found == A || found == b);
+                assert_eq!(d.template(), Template::Person(TrackId(now)));
+                if d.template() != before {
+                    switches += 1;
+                }
+                around = found;
+            }
+            assert!(
+                binomial_ok(switches, n as usize, p_drift),
+                "{switches} switches in {n} frames at p_drift {p_drift}"
+            );
+            let counts = stats.counts();
+            assert_eq!(counts.drifts, switches as u64);
+            assert_eq!(counts.detector_frames, u64::from(n));
+            assert_eq!((counts.spawned, counts.on_clutter), (1, 0));
+        }
+    }
+
+    #[test]
+    fn clutter_spawned_detector_fires_on_clutter_until_eqs_9_10_remove_it() {
+        // Nobody overlaps C, so the detector learns background there. The global detector only
+        // ever finds the person far away, so it never confirms C. With p_D = 0.6, p_FA = 0.5
+        // each unconfirmed frame multiplies the odds P/(1−P) by 0.4/0.5 = 0.8 (eq. 10): from
+        // 1 (P₀ = 0.5) the odds are 0.8^9 = 0.134 (P = 0.118) after 9 frames and
+        // 0.8^10 = 0.107 (P = 0.097 ≤ 0.1) after 10, so it fires on frames 0..=9 and is then
+        // removed.
+        let c = bx(100.0, 200.0, 40.0, 100.0);
+        let person = bx(400.0, 200.0, 40.0, 100.0);
+        let content = still(30, &[(0, person, 0.0)]);
+        let mut factory = SimulatedDetectors::over(content, perfect(), 23).unwrap();
+        assert_eq!(factory.detector(0, &c).template(), Template::Background(c));
+        let fusion = FusionConfig {
+            p_detect: 0.6,
+            p_false_alarm: 0.5,
+            ..FusionConfig::default()
+        };
+        let mut bank = DetectorBank::default();
+        bank.add(7, factory.spawn(0, &c), c, &fusion);
+        let mut fired = 0;
+        let mut removed_at = None;
+        for frame in 0..30 {
+            let found = bank.detect(frame);
+            if bank.has(7) {
+                assert_eq!(found.len(), 1, "frame {frame}: it keeps firing");
+                assert_eq!(found[0].1, c, "frame {frame}: on the clutter");
+                fired += 1;
+            } else {
+                assert!(found.is_empty());
+            }
+            if !bank
+                .update_confidence(&found, &[person], &fusion)
+                .is_empty()
+            {
+                removed_at.get_or_insert(frame);
+            }
+        }
+        assert_eq!(fired, 10);
+        assert_eq!(removed_at, Some(9));
+    }
+
+    #[test]
+    fn spawned_on_a_person_it_learns_that_person() {
+        let b = bx(300.0, 200.0, 40.0, 100.0);
+        let content = still(1, &[(4, A, 0.0), (9, b, 0.0)]);
+        let mut factory = SimulatedDetectors::over(content, perfect(), 1).unwrap();
+        // Half a box off: IoU 1/3 ≥ 0.3, so it learns A.
+        let shifted = bx(120.0, 200.0, 40.0, 100.0);
+        assert_eq!(
+            factory.detector(0, &shifted).template(),
+            Template::Person(TrackId(4))
+        );
+        assert_eq!(
+            factory.detector(0, &b).template(),
+            Template::Person(TrackId(9))
+        );
+        // 30 px off: IoU 1/7 < 0.3, so it learns the background there.
+        let off = bx(130.0, 200.0, 40.0, 100.0);
+        assert_eq!(
+            factory.detector(0, &off).template(),
+            Template::Background(off)
+        );
+    }
 }
