@@ -2,7 +2,8 @@
 //! TrackEval's `clear.py`: a pair may match only if its similarity reaches the threshold; a
 //! truth object keeps the estimate it was matched to in the previous frame when that pair is
 //! still valid (a bonus of 1000 in the assignment score); an identity switch is a matched truth
-//! whose estimate differs from the last one it was matched to, in any earlier frame.
+//! whose estimate differs from the last one it was matched to, in any earlier frame; a frame
+//! with no truth or no estimates neither matches nor breaks a run (TrackEval skips it).
 
 use serde::{Deserialize, Serialize};
 
@@ -31,7 +32,8 @@ pub struct ClearMetrics {
     pub false_negatives: usize,
     /// Identity switches.
     pub id_switches: usize,
-    /// Fragmentations: times a truth track is picked up again after being lost.
+    /// Fragmentations: times a truth track is picked up again after being lost (a frame with
+    /// no truth or no estimates does not lose it, as in TrackEval).
     pub fragmentations: usize,
     /// Truth tracks matched in more than 80 % of their frames.
     pub mostly_tracked: usize,
@@ -55,17 +57,21 @@ pub fn clear_mot(seq: &Sequence, threshold: f64) -> Result<ClearMetrics> {
     let mut segments = vec![0usize; n_gt];
     let (mut tp, mut fp, mut fn_, mut idsw) = (0usize, 0usize, 0usize, 0usize);
     let mut sim_sum = 0.0;
-    let mut previous_frame = None;
     let mut scores = Vec::new();
     let mut current: Vec<Option<usize>> = vec![None; n_gt];
     for f in &seq.frames {
-        // A frame with neither truth nor estimates ends every tracked run, as in TrackEval,
-        // which steps through every timestep.
-        if previous_frame.is_some_and(|p: u32| f.frame > p + 1) {
-            prev_frame_match.iter_mut().for_each(|m| *m = None);
-        }
-        previous_frame = Some(f.frame);
         let (ng, np) = (f.gt.len(), f.pred.len());
+        // As TrackEval's clear.py: a frame without truth or without estimates (and an empty
+        // frame, which the sequence skips) leaves the previous frame's matches in place, so a
+        // run of matches continues across it (no fragmentation, the same continuation bonus).
+        if ng == 0 || np == 0 {
+            fp += np;
+            fn_ += ng;
+            for &g in &f.gt {
+                present_frames[g] += 1;
+            }
+            continue;
+        }
         assignment_scores(f, &prev_frame_match, threshold, &mut scores);
         current.iter_mut().for_each(|m| *m = None);
         let mut n_matched = 0;

@@ -253,8 +253,37 @@ fn one_id_switch() {
 
 #[test]
 fn one_fragmentation() {
-    // Truth over frames 1-5, the estimate misses frame 3. CLEAR: TP 4, FN 1, Frag 1,
-    // MOTA 4/5. IDF1 = 2·4/(2·4 + 0 + 1). HOTA: DetA = 4/5; AssA = (4²/(5+4−4))/4 = 4/5.
+    // Truth over frames 1-5, the estimate misses frame 3, where a far-away false positive is
+    // the only estimate. CLEAR: TP 4, FN 1, FP 1, Frag 1, MOTA 3/5. IDF1 = 2·4/(2·4 + 1 + 1).
+    // HOTA: DetA = 4/6; AssA = (4²/(5+4−4))/4 = 4/5.
+    check(
+        &[(1, &[(1, 0.0), (2, 0.0), (3, 0.0), (4, 0.0), (5, 0.0)])],
+        &[
+            (3, &[(1, 0.0), (2, 0.0), (4, 0.0), (5, 0.0)]),
+            (9, &[(3, 500.0)]),
+        ],
+        &Expect {
+            mota: 0.6,
+            motp: 1.0,
+            tp: 4,
+            fp: 1,
+            fn_: 1,
+            idsw: 0,
+            frag: 1,
+            idf1: 0.8,
+            idp: 0.8,
+            idr: 0.8,
+            hota: (4.0f64 / 6.0 * 0.8).sqrt(),
+            det_a: 4.0 / 6.0,
+            ass_a: 0.8,
+            loc_a: 1.0,
+            sr: 0.8,
+            faf: 0.2,
+        },
+    );
+    // Without the false positive, frame 3 has no estimate at all; TrackEval's clear.py skips
+    // such a frame, so the run continues across it and there is no fragmentation (the
+    // reference run in testdata/gaps-* checks this convention against TrackEval itself).
     check(
         &[(1, &[(1, 0.0), (2, 0.0), (3, 0.0), (4, 0.0), (5, 0.0)])],
         &[(3, &[(1, 0.0), (2, 0.0), (4, 0.0), (5, 0.0)])],
@@ -265,7 +294,7 @@ fn one_fragmentation() {
             fp: 0,
             fn_: 1,
             idsw: 0,
-            frag: 1,
+            frag: 0,
             idf1: 8.0 / 9.0,
             idp: 1.0,
             idr: 0.8,
@@ -886,4 +915,89 @@ fn sparse_frame_numbers_group_like_dense_ones() {
             (&fb.gt, &fb.pred, &fb.sim, &fb.pair)
         );
     }
+}
+
+// Agreement with TrackEval (Luiten et al.), the reference implementation of HOTA, on the same
+// synthetic sequence (boxes with noise: IoU < 1, so LocA and MOTP are exercised) and on a small
+// sequence with empty frames (testdata/gen_trackeval_reference.py made the reference numbers).
+// TrackEval's MT/PT/ML thresholds (matched in > 80 %, ≥ 20 % of the frames a truth object is
+// present) and its Frag (number of tracked runs of a truth object less one) are ours too.
+
+fn trackeval_reference() -> serde_json::Value {
+    serde_json::from_str(include_str!("../testdata/synthetic-trackeval.json")).unwrap()
+}
+
+fn check_against_trackeval(gt_text: &str, pred_text: &str, want: &serde_json::Value) {
+    let load = |text: &str| {
+        TrackSet::from_mot_rows(&tracker_model::parse_mot(text.as_bytes()).unwrap()).unwrap()
+    };
+    let r = evaluate(&load(gt_text), &load(pred_text), &EvalConfig::default()).unwrap();
+    let f = |k: &str| want[k].as_f64().unwrap();
+    let n = |k: &str| want[k].as_u64().unwrap() as usize;
+    let c = &r.clear;
+    assert_eq!(
+        (c.true_positives, c.false_negatives, c.false_positives),
+        (n("CLR_TP"), n("CLR_FN"), n("CLR_FP"))
+    );
+    assert_eq!(c.id_switches, n("IDSW"), "IDSW");
+    assert_eq!(c.fragmentations, n("Frag"), "Frag");
+    assert_eq!(
+        (c.mostly_tracked, c.partially_tracked, c.mostly_lost),
+        (n("MT"), n("PT"), n("ML")),
+        "MT/PT/ML"
+    );
+    assert_eq!(c.n_gt_tracks, n("num_gt_ids"));
+    for (ours, key) in [
+        (c.mota, "MOTA"),
+        (c.motp, "MOTP"),
+        (c.moda, "MODA"),
+        (c.recall, "CLR_Re"),
+        (c.precision, "CLR_Pr"),
+        (r.identity.idf1, "IDF1"),
+        (r.identity.idp, "IDP"),
+        (r.identity.idr, "IDR"),
+        (r.hota.hota, "HOTA"),
+        (r.hota.det_a, "DetA"),
+        (r.hota.ass_a, "AssA"),
+        (r.hota.loc_a, "LocA"),
+        (r.hota.det_re, "DetRe"),
+        (r.hota.det_pr, "DetPr"),
+        (r.hota.ass_re, "AssRe"),
+        (r.hota.ass_pr, "AssPr"),
+    ] {
+        assert!(
+            (ours - f(key)).abs() <= 1e-9,
+            "{key}: ours {ours}, TrackEval {}",
+            f(key)
+        );
+    }
+    assert_eq!(
+        (r.identity.idtp, r.identity.idfp, r.identity.idfn),
+        (n("IDTP"), n("IDFP"), n("IDFN"))
+    );
+    let per_alpha = want["HOTA_per_alpha"].as_array().unwrap();
+    assert_eq!(r.hota.per_alpha.len(), per_alpha.len());
+    for (ours, theirs) in r.hota.per_alpha.iter().zip(per_alpha) {
+        assert!((ours - theirs.as_f64().unwrap()).abs() <= 1e-9);
+    }
+    // LocA is exercised: the matched boxes do not coincide.
+    assert!(r.hota.loc_a < 0.9);
+}
+
+#[test]
+fn hota_clear_and_identity_agree_with_trackeval() {
+    check_against_trackeval(
+        include_str!("../testdata/synthetic-gt.txt"),
+        include_str!("../testdata/synthetic-pred.txt"),
+        &trackeval_reference(),
+    );
+}
+
+#[test]
+fn empty_frames_follow_trackeval() {
+    check_against_trackeval(
+        include_str!("../testdata/gaps-gt.txt"),
+        include_str!("../testdata/gaps-pred.txt"),
+        &trackeval_reference()["gaps"],
+    );
 }

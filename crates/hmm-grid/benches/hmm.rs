@@ -1,5 +1,7 @@
 //! HMM benchmarks: a 20×20 grid (400 states, stay + 4 neighbours, sparse), M = 400 symbols,
-//! T = 1000; and a dense N = 400 model of the same size.
+//! T = 1000; the same grid model stored dense (what hmmlearn computes with, so the like-for-like
+//! comparison with docs/comparisons/hmmlearn_grid400.py); and a dense N = 400 model of the same
+//! size with every transition possible.
 #![expect(clippy::unwrap_used, reason = "benchmarks run on fixed, valid inputs")]
 
 use std::hint::black_box;
@@ -87,6 +89,30 @@ fn bench_hmm(c: &mut Criterion) {
     });
     c.bench_function("grid400_baum_welch_iteration_T1000", |b| {
         b.iter(|| baum_welch(&grid, black_box(&seqs), &one_iteration).unwrap())
+    });
+    // The same grid model with A stored dense: N² work per step, like hmmlearn's.
+    let grid_dense = Hmm::new(
+        grid.initial().to_vec(),
+        grid.transitions().to_storage(StorageChoice::Dense),
+        grid.emissions().to_vec(),
+        400,
+    )
+    .unwrap();
+    assert!(!grid_dense.transitions().is_sparse());
+    c.bench_function("grid400_dense_forward_backward_T1000", |b| {
+        b.iter(|| posterior(&grid_dense, black_box(&obs)).unwrap())
+    });
+    c.bench_function("grid400_dense_viterbi_T1000", |b| {
+        b.iter(|| viterbi(&grid_dense, black_box(&obs)).unwrap())
+    });
+    c.bench_function("grid400_dense_baum_welch_iteration_T1000", |b| {
+        b.iter(|| baum_welch(&grid_dense, black_box(&seqs), &one_iteration).unwrap())
+    });
+    c.bench_function("grid400_dense_baum_welch_2_iterations_T1000", |b| {
+        b.iter(|| baum_welch(&grid_dense, black_box(&seqs), &two).unwrap())
+    });
+    c.bench_function("grid400_dense_baum_welch_3_iterations_T1000", |b| {
+        b.iter(|| baum_welch(&grid_dense, black_box(&seqs), &three).unwrap())
     });
     let dense = dense_model(&mut rng);
     assert!(!dense.transitions().is_sparse());

@@ -43,8 +43,14 @@ pub struct PseudoCounts {
 pub struct BaumWelchConfig {
     /// Upper bound on re-estimation steps.
     pub max_iterations: usize,
-    /// Stop when the total log-likelihood improves by less than this (absolute, ≥ 0).
+    /// Stop when the total log-likelihood changes by less than this (absolute, ≥ 0).
     pub tolerance: f64,
+    /// Also stop when the change is at most this fraction of the log-likelihood,
+    /// |ΔLL| ≤ rel · |LL| (≥ 0; 0 turns it off). The absolute tolerance alone never triggers on
+    /// large training sets: the log-likelihood grows with the number of steps, and EM's late
+    /// steps shrink only linearly (Dempster, Laird & Rubin 1977), so a fixed absolute change
+    /// is reached ever later; a relative one scales with the data.
+    pub relative_tolerance: f64,
     /// Frozen components.
     pub freeze: Freeze,
     /// Pseudo-counts.
@@ -56,6 +62,7 @@ impl Default for BaumWelchConfig {
         Self {
             max_iterations: 100,
             tolerance: 1e-6,
+            relative_tolerance: 0.0,
             freeze: Freeze::default(),
             pseudo_counts: PseudoCounts::default(),
         }
@@ -67,6 +74,7 @@ impl BaumWelchConfig {
     /// returns the trainer that runs with them.
     pub fn check(&self) -> Result<BaumWelch> {
         ensure_non_negative(self.tolerance, "tolerance")?;
+        ensure_non_negative(self.relative_tolerance, "relative_tolerance")?;
         let pc = self.pseudo_counts;
         ensure_non_negative(pc.initial, "pseudo_counts.initial")?;
         ensure_non_negative(pc.transitions, "pseudo_counts.transitions")?;
@@ -87,8 +95,16 @@ pub struct FitReport {
     /// Total log-likelihood of the training sequences under each successive model, the initial
     /// one first and the returned one last.
     pub log_likelihoods: Vec<f64>,
-    /// Whether the improvement fell below the tolerance before `max_iterations`.
+    /// Whether the change fell below the absolute or the relative tolerance within
+    /// `max_iterations`.
     pub converged: bool,
+}
+
+impl FitReport {
+    /// Re-estimation steps taken (M-steps).
+    pub fn iterations(&self) -> usize {
+        self.log_likelihoods.len().saturating_sub(1)
+    }
 }
 
 /// Expected counts of one sequence (the E-step), or of several summed.
@@ -254,7 +270,10 @@ impl BaumWelch {
             model = next;
             stats = next_stats;
             history.push(stats.log_likelihood);
-            if gain.abs() < config.tolerance {
+            if gain.abs() < config.tolerance
+                || (config.relative_tolerance > 0.0
+                    && gain.abs() <= config.relative_tolerance * stats.log_likelihood.abs())
+            {
                 converged = true;
                 break;
             }

@@ -322,9 +322,193 @@ fn a_million_steps_neither_underflow_nor_overflow() {
     assert!((post.at(999_999).iter().sum::<f64>() - 1.0).abs() < 1e-9);
     let (path, log_p) = viterbi(&hmm, &obs).unwrap();
     assert!(log_p.is_finite() && log_p < f.log_likelihood);
-    // The decoded path is informative: it agrees with the truth more often than chance.
-    let agree = path.iter().zip(&states).filter(|(a, b)| a == b).count();
-    assert!(agree > 400_000, "{agree}");
+    // The Viterbi score is the joint log-probability of its path, recomputed here by the plain
+    // product of the model's entries, and no smaller than that of the true path (it is the max).
+    let joint = |p: &[usize]| {
+        let mut lp = hmm.initial()[p[0]].ln() + hmm.emission(p[0], obs[0]).ln();
+        for t in 1..p.len() {
+            lp += hmm.transitions().get(p[t - 1], p[t]).ln() + hmm.emission(p[t], obs[t]).ln();
+        }
+        lp
+    };
+    assert_relative_eq!(joint(&path), log_p, max_relative = 1e-9);
+    assert!(log_p >= joint(&states));
+    // Given the observations, the truth at step t is in state i with probability γ_t(i), so the
+    // number of steps on which a decoded path agrees with the truth has expectation
+    // Σ_t γ_t(path_t) and variance Σ_t p_t(1 − p_t) ≤ T/4 (times a small factor for the
+    // correlation between neighbouring steps of this fast-mixing 3-state chain): σ ≤ ~1000 at
+    // T = 10⁶. A tolerance of T/100 = 10 000 is ≥ 10σ, yet a decoder wrong on 1 % of the steps,
+    // or a posterior off by 0.01 on average, fails it; chance agreement (~T/3) is far outside.
+    for (decoder, decoded) in [
+        ("viterbi", path),
+        ("posterior", posterior_decode(&hmm, &obs).unwrap()),
+    ] {
+        let agree = decoded.iter().zip(&states).filter(|(a, b)| a == b).count() as f64;
+        let expected: f64 = decoded
+            .iter()
+            .enumerate()
+            .map(|(t, &s)| post.at(t)[s])
+            .sum();
+        assert!(
+            (agree - expected).abs() <= 1e4,
+            "{decoder}: {agree} steps agree, the posterior expects {expected}"
+        );
+    }
+}
+
+/// Baum-Welch recovers a known model from long simulated data, within a tolerance derived from
+/// the data size.
+///
+/// Complete data: a row i visited n_i ≈ T·s_i times (T steps in all, s the stationary
+/// distribution of A) gives a maximum-likelihood a_ij that is a multinomial proportion with
+/// standard error √(a_ij (1 − a_ij) / n_i); likewise b_i(m) over the n_i visits of state i.
+/// Hidden states: the observed-data information is the complete-data one less the missing
+/// information (Louis 1982), so the standard errors grow by at most 1/√(1 − λ), λ the largest
+/// fraction of missing information, which is also EM's linear rate of convergence
+/// (Dempster, Laird & Rubin 1977, §3): late in the run θ_k − θ* shrinks by λ per step and the
+/// log-likelihood gains by λ². So λ is read off the run's own gains, and every entry must lie
+/// within 5 such inflated standard errors of the truth (here λ ≈ 0.92, an inflation ≈ 3.5; the
+/// complete-data errors of the same samples are all below 2 s.e.). A Baum-Welch that did not
+/// learn would stay at the start, > 15 inflated s.e. away.
+#[test]
+fn baum_welch_recovers_a_known_model_from_long_data() {
+    let a = [0.8, 0.15, 0.05, 0.1, 0.7, 0.2, 0.2, 0.1, 0.7];
+    let b = [
+        0.85, 0.1, 0.03, 0.02, //
+        0.05, 0.85, 0.05, 0.05, //
+        0.02, 0.03, 0.1, 0.85,
+    ];
+    let truth = Hmm::new(
+        vec![1.0 / 3.0; 3],
+        Transitions::dense(3, a.to_vec()).unwrap(),
+        b.to_vec(),
+        4,
+    )
+    .unwrap();
+    // Start away from the truth but with the same labelling (EM finds a local maximum; a start
+    // this close keeps it in the truth's basin and rules out a permutation of the states).
+    let perturb = |v: &[f64], cols: usize, sign: f64| -> Vec<f64> {
+        v.chunks(cols)
+            .enumerate()
+            .flat_map(|(i, row)| {
+                let mut r: Vec<f64> = row
+                    .iter()
+                    .enumerate()
+                    .map(|(j, x)| x + if (i + j) % 2 == 0 { sign * 0.1 } else { 0.0 })
+                    .map(|x: f64| x.max(0.02))
+                    .collect();
+                let s: f64 = r.iter().sum();
+                r.iter_mut().for_each(|x| *x /= s);
+                r
+            })
+            .collect()
+    };
+    let start = Hmm::new(
+        vec![1.0 / 3.0; 3],
+        Transitions::dense(3, perturb(&a, 3, 1.0)).unwrap(),
+        perturb(&b, 4, -1.0),
+        4,
+    )
+    .unwrap();
+    let (k, len) = (40, 5_000);
+    let data = training_data(&truth, k, len, 77);
+    let cfg = BaumWelchConfig {
+        max_iterations: 1000,
+        tolerance: 0.0,
+        // |LL| ≈ 1.5·10⁵, so this stops at |ΔLL| ≈ 10⁻⁸, far above rounding (≈ 10⁻¹¹).
+        relative_tolerance: 1e-13,
+        freeze: Freeze {
+            initial: true,
+            ..Freeze::default()
+        },
+        ..BaumWelchConfig::default()
+    };
+    let (learned, report) = baum_welch(&start, &data, &cfg).unwrap();
+    assert!(report.converged, "{} iterations", report.iterations());
+    // λ² from the geometric mean ratio of successive gains while they fall from 10⁻⁴ to 10⁻⁷.
+    let gains: Vec<f64> = report
+        .log_likelihoods
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .collect();
+    let first = gains.iter().position(|&g| g < 1e-4).unwrap();
+    let last = gains.iter().position(|&g| g < 1e-7).unwrap();
+    assert!(last > first + 5 && gains[first..=last].iter().all(|&g| g > 0.0));
+    let lambda = (gains[last] / gains[first])
+        .powf(1.0 / (last - first) as f64)
+        .sqrt();
+    assert!((0.0..0.99).contains(&lambda), "{lambda}");
+    let inflation = 1.0 / (1.0 - lambda).sqrt();
+    // Stationary distribution of A by power iteration.
+    let mut s = [1.0 / 3.0; 3];
+    for _ in 0..1000 {
+        let mut next = [0.0; 3];
+        for i in 0..3 {
+            for j in 0..3 {
+                next[j] += s[i] * a[i * 3 + j];
+            }
+        }
+        s = next;
+    }
+    let steps = (k * len) as f64;
+    let z = |truth: f64, est: f64, visits: f64| {
+        (est - truth).abs() / ((truth * (1.0 - truth) / visits).sqrt() * inflation)
+    };
+    // The largest error of a model's entries in inflated standard errors, and where.
+    let worst = |model: &Hmm| {
+        let mut out = (0.0, String::new());
+        for i in 0..3 {
+            // Transitions out of i are counted on every step but the last of each sequence.
+            let visits = (steps - k as f64) * s[i];
+            for j in 0..3 {
+                let zz = z(a[i * 3 + j], model.transitions().get(i, j), visits);
+                if zz > out.0 {
+                    out = (zz, format!("a[{i}][{j}]"));
+                }
+            }
+            for m in 0..4 {
+                let zz = z(b[i * 4 + m], model.emission(i, m), steps * s[i]);
+                if zz > out.0 {
+                    out = (zz, format!("b[{i}][{m}]"));
+                }
+            }
+        }
+        out
+    };
+    let (learned_z, at) = worst(&learned);
+    assert!(
+        learned_z <= 5.0,
+        "{at} is {learned_z:.1} s.e. from the truth"
+    );
+    let (start_z, _) = worst(&start);
+    assert!(start_z > 15.0, "{start_z}");
+}
+
+#[test]
+fn relative_tolerance_stops_where_the_absolute_one_does_not() {
+    let truth = random_hmm(4, 3, false, 81);
+    let start = random_hmm(4, 3, false, 82);
+    let data = training_data(&truth, 20, 200, 83);
+    let absolute = BaumWelchConfig {
+        max_iterations: 40,
+        tolerance: 1e-12,
+        ..BaumWelchConfig::default()
+    };
+    let (_, slow) = baum_welch(&start, &data, &absolute).unwrap();
+    assert!(!slow.converged && slow.iterations() == 40);
+    let relative = BaumWelchConfig {
+        relative_tolerance: 1e-4,
+        ..absolute
+    };
+    let (_, fast) = baum_welch(&start, &data, &relative).unwrap();
+    assert!(fast.converged && fast.iterations() < 40);
+    // It stopped at the first step whose change met |ΔLL| ≤ rel·|LL|, and not before.
+    let ll = &fast.log_likelihoods;
+    let met = |w: &[f64]| (w[1] - w[0]).abs() <= 1e-4 * w[1].abs();
+    assert!(met(&ll[ll.len() - 2..]));
+    assert!(ll.windows(2).rev().skip(1).all(|w| !met(w)));
+    // Up to that step both runs are the same computation.
+    assert_eq!(ll[..], slow.log_likelihoods[..ll.len()]);
 }
 
 #[test]
@@ -544,6 +728,13 @@ fn configs_are_checked_once_and_reject_unknown_fields() {
                 ..BaumWelchConfig::default()
             },
             "tolerance",
+        ),
+        (
+            BaumWelchConfig {
+                relative_tolerance: -1e-6,
+                ..BaumWelchConfig::default()
+            },
+            "relative_tolerance",
         ),
         (
             BaumWelchConfig {

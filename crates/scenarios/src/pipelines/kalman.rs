@@ -15,7 +15,7 @@ use tracker_model::{
     position_measurement, smooth,
 };
 
-use crate::{Chart, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
+use crate::{Chart, Claim, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
 
 /// The `kalman-crossing` pipeline.
 pub struct KalmanCrossing;
@@ -315,6 +315,42 @@ impl Pipeline for KalmanCrossing {
             total.missed as f64 / (out.n_tracks() * out.n_steps as f64),
         );
         metrics
+    }
+
+    fn claims(out: &Output) -> Vec<Claim> {
+        let m = Self::metrics(out);
+        let (lo, hi) = out.anees_95;
+        // A consistent estimator's per-scan ANEES falls inside its 95 % interval on 95 % of the
+        // scans; 3 binomial standard errors around that allows for chance.
+        let band = 3.0 * (0.95 * 0.05 / out.n_steps as f64).sqrt();
+        let share_ok = |k: &str| (m[k] - 0.95).abs() <= band;
+        vec![
+            Claim::new(
+                "smoothed RMSE < filtered RMSE, for position and for velocity",
+                m["position_rmse_smoothed"] < m["position_rmse_filtered"]
+                    && m["velocity_rmse_smoothed"] < m["velocity_rmse_filtered"],
+            ),
+            Claim::new(
+                format!(
+                    "the ANEES over all scans lies inside the per-scan 95 % χ² interval \
+                     [{}, {}], for the filter and the smoother",
+                    fmt_num(lo),
+                    fmt_num(hi)
+                ),
+                [m["anees_filtered"], m["anees_smoothed"]]
+                    .iter()
+                    .all(|a| (lo..=hi).contains(a)),
+            ),
+            Claim::new(
+                format!(
+                    "the share of scans whose ANEES is inside its 95 % χ² interval is within \
+                     3 binomial s.e. of 95 % (± {}), for the filter and the smoother",
+                    fmt_num(band)
+                ),
+                share_ok("steps_with_anees_in_95_filtered")
+                    && share_ok("steps_with_anees_in_95_smoothed"),
+            ),
+        ]
     }
 
     fn present(out: &Output) -> Section {

@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use serde::Deserialize;
 use tracker_model::{Origin, Simulation, SimulationConfig};
 
-use crate::{Chart, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
+use crate::{Chart, Claim, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
 
 /// The `simulator-poisson` pipeline.
 pub struct SimulatorPoisson;
@@ -146,6 +146,21 @@ impl Pipeline for SimulatorPoisson {
             );
         }
         metrics
+    }
+
+    fn claims(out: &Output) -> Vec<Claim> {
+        let mut claims = vec![Claim::new(
+            "every observed rate (births, false alarms, detections, disappearances) lies within \
+             4 standard errors of the model value",
+            rates(out).iter().all(|r| r.4.abs() < 4.0),
+        )];
+        if let Some(v_max) = out.config.max_speed {
+            claims.push(Claim::new(
+                "no simulated target exceeds the speed bound",
+                out.total.max_speed_seen <= v_max,
+            ));
+        }
+        claims
     }
 
     fn present(out: &Output) -> Section {
