@@ -83,7 +83,7 @@ pub fn render(chart: &Chart) -> Result<String> {
         for s in series {
             let (colour, width) = look(s);
             match s.style {
-                Style::Line | Style::ThinLine => plot.draw_series(LineSeries::new(
+                Style::Line | Style::ThinLine | Style::Faint => plot.draw_series(LineSeries::new(
                     s.points.iter().copied(),
                     colour.stroke_width(width),
                 )),
@@ -123,6 +123,7 @@ fn look(s: &Series) -> (RGBAColor, u32) {
     match s.style {
         Style::Line => (colour, 2),
         Style::ThinLine => (colour.mix(0.6), 1),
+        Style::Faint => (colour.mix(0.2), 1),
         Style::Markers => (colour.mix(0.7), 1),
     }
 }

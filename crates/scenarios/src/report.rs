@@ -122,6 +122,9 @@ pub enum Style {
     Line,
     /// A thin, lighter polyline.
     ThinLine,
+    /// A very light hairline, for background structure (map links, grids) that data drawn
+    /// over it must stand out from.
+    Faint,
     /// Small circles.
     Markers,
 }

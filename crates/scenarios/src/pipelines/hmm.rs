@@ -593,7 +593,7 @@ impl Pipeline for HmmTracking {
                     Chart::new(
                         "Baum-Welch training log-likelihood",
                         "iteration",
-                        "log-likelihood",
+                        "log-likelihood (nats)",
                         vec![Series::new(
                             "training sequences",
                             out.log_likelihoods
@@ -772,7 +772,7 @@ fn error_chart(out: &Output) -> Chart {
     Chart::new(
         "Distance error against time (mean over test sequences)",
         "time step",
-        "distance error",
+        "distance error (m)",
         err_series,
     )
 }
@@ -789,7 +789,7 @@ fn map_chart(out: &Output) -> Chart {
                 map_series.push(Series::new(
                     "",
                     vec![(a.x, a.y), (b.x, b.y)],
-                    Style::ThinLine,
+                    Style::Faint,
                     7,
                 ));
             }
@@ -819,7 +819,7 @@ fn map_chart(out: &Output) -> Chart {
             c,
         ));
     }
-    Chart::new("Test sequence 0 on the map", "x", "y", map_series)
+    Chart::new("Test sequence 0 on the map", "x (m)", "y (m)", map_series)
 }
 
 /// Mean error of the learned model against K with its 95 % CI band, Viterbi and posterior

@@ -375,7 +375,7 @@ impl Pipeline for KalmanCrossing {
                     Chart::new(
                         "Position RMSE per scan",
                         "scan",
-                        "RMSE",
+                        "position RMSE (length units)",
                         vec![
                             Series::new(
                                 "filtered",
@@ -464,5 +464,10 @@ fn track_chart(run0: &[TargetRun]) -> Chart {
             1,
         ));
     }
-    Chart::new("Run 0: truth, measurements and estimates", "x", "y", series)
+    Chart::new(
+        "Run 0: truth, measurements and estimates",
+        "x (length units)",
+        "y (length units)",
+        series,
+    )
 }

@@ -263,8 +263,8 @@ fn figures(out: &Output) -> Vec<Figure> {
     );
     let tracks_chart = Chart::new(
         "Tracks (colours) over the true trajectories (grey)",
-        "x",
-        "y",
+        "x (region units)",
+        "y (region units)",
         series,
     );
     let ospa_chart = Chart::new(
