@@ -1,0 +1,632 @@
+//! Delay-and-sum beamforming over B beams (Kushwaha et al. 2008; our §5.1 reconstruction), in
+//! the time domain (band-pass FIR, then windowed-sinc fractional steering delays) and in the
+//! frequency domain (steered response power over FFT bins, optionally PHAT-weighted).
+//!
+//! Sign convention: a plane wave from direction u reaches microphone m (at r_m from the array
+//! centre) τ_m = (r_m · u)/c seconds *early*, x_m(t) = s(t + τ_m), so steering *delays* each
+//! channel by τ_m: y(t) = Σ_m x_m(t − τ_m), or Y(f) = Σ_m X_m(f) e^{−j2πfτ_m}. (Our §5.1 note
+//! writes "+"; with τ defined as an advance that would steer to the opposite direction. The
+//! tests check the sign against the simulator's geometric propagation, an independent route.)
+
+use std::f64::consts::TAU;
+use std::sync::Arc;
+
+use realfft::num_complex::Complex;
+use realfft::{RealFftPlanner, RealToComplex};
+use serde::{Deserialize, Serialize};
+use tracker_model::{Error, Frame, FrameClock};
+
+use crate::array::{MicArray, SOUND_SPEED_MPS};
+use crate::error::{AudioError, Result};
+use crate::interp::{bandpass_fir, fractional_taps};
+use crate::recording::{Recording, check_channels};
+use tracker_model::{BearingProfile, SensorPose};
+
+/// Where the delay-and-sum is computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Method {
+    /// Band-pass FIR per channel, fractional delays by windowed-sinc interpolation, sum, energy.
+    TimeDomain,
+    /// FFT per channel, phase-shift steering per bin in the band, energy by Parseval.
+    #[default]
+    FrequencyDomain,
+}
+
+/// Spectral weighting of the frequency-domain beamformer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Weighting {
+    /// Plain steered response power: loud bins dominate.
+    #[default]
+    Plain,
+    /// Phase transform: every bin of every channel scaled to unit magnitude, so all bins in
+    /// the band count equally (SRP-PHAT; the stronger estimator under reverberation). Only for
+    /// [`Method::FrequencyDomain`].
+    Phat,
+}
+
+/// Analysis window of the frequency-domain beamformer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Window {
+    /// No taper: energies equal the time-domain ones by Parseval (circular shifts aside).
+    Rectangular,
+    /// Hann taper: less leakage from strong out-of-band components (engine harmonics).
+    #[default]
+    Hann,
+}
+
+/// Beamformer parameters; [`BeamformConfig::check`] turns them into a [`Beamformer`] for one
+/// array. Defaults: the papers' 36 beams of 10°; our choices 16 kHz, 512-sample frames without overlap
+/// and a 200–4000 Hz band (see docs/audio.md for why).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BeamformConfig {
+    /// Number of beams B, beam b steered to b·360°/B in the array frame.
+    pub n_beams: usize,
+    /// Sample rate of the input, Hz.
+    pub sample_rate_hz: u32,
+    /// Samples per frame.
+    pub frame_len: usize,
+    /// Samples between frame starts.
+    pub hop: usize,
+    /// Pass band [low, high] in Hz; energy outside it is ignored.
+    pub band_hz: [f64; 2],
+    /// Speed of sound, m/s.
+    pub sound_speed_mps: f64,
+    /// Time or frequency domain.
+    pub method: Method,
+    /// Plain or PHAT (frequency domain only).
+    pub weighting: Weighting,
+    /// Analysis window (frequency domain only).
+    pub window: Window,
+    /// Length of the band-pass FIR (time domain only; odd).
+    pub fir_taps: usize,
+    /// Zero crossings each side of the fractional-delay sinc (time domain only).
+    pub interp_half_width: usize,
+}
+
+impl Default for BeamformConfig {
+    fn default() -> Self {
+        Self {
+            n_beams: 36,
+            sample_rate_hz: 16_000,
+            frame_len: 512,
+            hop: 512,
+            band_hz: [200.0, 4000.0],
+            sound_speed_mps: SOUND_SPEED_MPS,
+            method: Method::FrequencyDomain,
+            weighting: Weighting::Plain,
+            window: Window::Hann,
+            fir_taps: 65,
+            interp_half_width: 4,
+        }
+    }
+}
+
+/// The beam energies of one frame: the node's report (the "beamform"). `energies[b]` is the
+/// mean power of the beam steered to `b`·2π/B (array frame) over the frame, in squared input
+/// units (dimensionless under PHAT); `time_s` is the frame's centre on the recording's clock.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Beamform {
+    /// Centre of the frame, seconds.
+    pub time_s: f64,
+    /// One energy per beam.
+    pub energies: Vec<f64>,
+}
+
+/// A direction of arrival read off a beamform.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Doa {
+    /// Bearing in the array frame, radians in [0, 2π), refined between beams.
+    pub bearing_rad: f64,
+    /// The peak beam's index.
+    pub beam: usize,
+    /// The peak beam's energy.
+    pub energy: f64,
+}
+
+/// How several peaks are picked from one beamform.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PeakSearch {
+    /// At most this many peaks, strongest first.
+    pub max_peaks: usize,
+    /// A peak must rise at least this fraction of the beamform's range (max − min) above its
+    /// minimum: the floor of a small array's broad beams carries no information.
+    pub min_relative: f64,
+}
+
+impl Default for PeakSearch {
+    fn default() -> Self {
+        Self {
+            max_peaks: 4,
+            min_relative: 0.1,
+        }
+    }
+}
+
+/// How beam energies become a bearing profile.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum EnergyScaling {
+    /// The energies as they are.
+    Raw,
+    /// Energies minus their minimum over beams (§5.1's option): a small array's beams are so
+    /// broad that every beam hears a source; the floor would spread evidence everywhere.
+    #[default]
+    MinSubtracted,
+}
+
+impl Beamform {
+    /// Number of beams.
+    pub fn n_beams(&self) -> usize {
+        self.energies.len()
+    }
+
+    /// Direction of beam `b` in the array frame, radians.
+    pub fn beam_angle_rad(&self, b: usize) -> f64 {
+        TAU * b as f64 / self.energies.len().max(1) as f64
+    }
+
+    /// The tracker frame nearest to this beamform's time stamp.
+    pub fn frame(&self, clock: &FrameClock) -> Result<Frame> {
+        Ok(clock.frame_at(self.time_s)?)
+    }
+
+    /// The strongest direction: the argmax beam refined by a parabola through it and its two
+    /// (circular) neighbours. `None` for a flat beamform (no direction at all).
+    pub fn doa(&self) -> Option<Doa> {
+        let (beam, _) = self
+            .energies
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(&a.0)))?;
+        let min = self.energies.iter().copied().fold(f64::INFINITY, f64::min);
+        (self.energies[beam] > min).then(|| self.refine(beam))
+    }
+
+    /// Up to `search.max_peaks` local maxima (circular), strongest first, each refined like
+    /// [`Beamform::doa`]. Empty for a flat beamform.
+    pub fn peaks(&self, search: &PeakSearch) -> Vec<Doa> {
+        let n = self.energies.len();
+        let e = &self.energies;
+        let min = e.iter().copied().fold(f64::INFINITY, f64::min);
+        let max = e.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if n < 3 || max <= min || max.is_nan() {
+            return self.doa().into_iter().collect();
+        }
+        let floor = min + search.min_relative * (max - min);
+        let mut found: Vec<Doa> = (0..n)
+            .filter(|&b| {
+                let (prev, next) = (e[(b + n - 1) % n], e[(b + 1) % n]);
+                // ≥ on one side, > on the other: a two-beam plateau yields one peak.
+                e[b] >= prev && e[b] > next && e[b] >= floor
+            })
+            .map(|b| self.refine(b))
+            .collect();
+        found.sort_by(|a, b| b.energy.total_cmp(&a.energy).then(a.beam.cmp(&b.beam)));
+        found.truncate(search.max_peaks);
+        found
+    }
+
+    fn refine(&self, beam: usize) -> Doa {
+        let n = self.energies.len();
+        let step = TAU / n as f64;
+        let mut offset = 0.0;
+        if n >= 3 {
+            let (l, c, r) = (
+                self.energies[(beam + n - 1) % n],
+                self.energies[beam],
+                self.energies[(beam + 1) % n],
+            );
+            let denom = l - 2.0 * c + r;
+            if denom < 0.0 {
+                offset = (0.5 * (l - r) / denom).clamp(-0.5, 0.5);
+            }
+        }
+        Doa {
+            bearing_rad: ((beam as f64 + offset) * step).rem_euclid(TAU),
+            beam,
+            energy: self.energies[beam],
+        }
+    }
+
+    /// The bearing profile of this beamform for a node at `pose` (beam b points at world
+    /// bearing heading + b·2π/B), ready to be projected onto a likelihood grid.
+    pub fn bearing_profile(
+        &self,
+        pose: SensorPose,
+        scaling: EnergyScaling,
+    ) -> Result<BearingProfile> {
+        let min = self.energies.iter().copied().fold(f64::INFINITY, f64::min);
+        let values = match scaling {
+            EnergyScaling::Raw => self.energies.clone(),
+            EnergyScaling::MinSubtracted => self.energies.iter().map(|e| e - min).collect(),
+        };
+        Ok(BearingProfile::full_circle(pose, values)?)
+    }
+}
+
+/// A checked beamformer for one array; holds its scratch buffers, so beamforming a frame does
+/// not allocate. Clone it to use on several threads.
+#[derive(Clone)]
+pub struct Beamformer {
+    config: BeamformConfig,
+    n_mics: usize,
+    engine: Engine,
+}
+
+#[derive(Clone)]
+enum Engine {
+    Time(TimeDomain),
+    Freq(FreqDomain),
+}
+
+#[derive(Clone)]
+struct TimeDomain {
+    fir: Vec<f32>,
+    /// Fractional-delay taps, [beam][mic][2·half].
+    taps: Vec<f32>,
+    /// First filtered sample each (beam, mic) tap set reads.
+    starts: Vec<usize>,
+    n_taps: usize,
+    n_out: usize,
+    filtered: Vec<Vec<f32>>,
+    beam: Vec<f32>,
+}
+
+#[derive(Clone)]
+struct FreqDomain {
+    fft: Arc<dyn RealToComplex<f64>>,
+    window: Vec<f64>,
+    first_bin: usize,
+    n_bins: usize,
+    /// Steering phases e^{−j2πf_kτ_{m,b}}, [beam][bin][mic].
+    steer: Vec<Complex<f64>>,
+    /// Parseval weight of each bin in the band (1 for DC and Nyquist, 2 otherwise) / (L Σw²).
+    bin_weight: Vec<f64>,
+    input: Vec<f64>,
+    spectrum: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+    /// Band spectra of all channels, [bin][mic].
+    band: Vec<Complex<f64>>,
+    phat: bool,
+}
+
+impl std::fmt::Debug for Beamformer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Beamformer")
+            .field("config", &self.config)
+            .field("n_mics", &self.n_mics)
+            .finish_non_exhaustive()
+    }
+}
+
+impl BeamformConfig {
+    /// Checks the parameters against `array` and precomputes filters and steering tables.
+    pub fn check(&self, array: &MicArray) -> Result<Beamformer> {
+        if self.sample_rate_hz == 0 {
+            return Err(AudioError::ZeroSampleRate);
+        }
+        let fs = f64::from(self.sample_rate_hz);
+        if self.n_beams == 0 {
+            return Err(Error::InvalidParameter {
+                name: "n_beams",
+                reason: "must be at least 1".into(),
+            }
+            .into());
+        }
+        if self.hop == 0 {
+            return Err(Error::InvalidParameter {
+                name: "hop",
+                reason: "must be at least 1 sample".into(),
+            }
+            .into());
+        }
+        tracker_model::ensure_positive(self.sound_speed_mps, "sound_speed_mps")?;
+        let [lo, hi] = self.band_hz;
+        tracker_model::ensure_in_range(lo, 0.0, fs / 2.0, "band_hz[0]")?;
+        tracker_model::ensure_in_range(hi, 0.0, fs / 2.0, "band_hz[1]")?;
+        if hi <= lo {
+            return Err(Error::InvalidParameter {
+                name: "band_hz",
+                reason: format!("[{lo}, {hi}]: the upper edge must exceed the lower"),
+            }
+            .into());
+        }
+        let n_mics = array.n_mics();
+        // advances[b·M + m] in samples.
+        let advances: Vec<f64> = (0..self.n_beams)
+            .flat_map(|b| {
+                array.arrival_advances_s(TAU * b as f64 / self.n_beams as f64, self.sound_speed_mps)
+            })
+            .map(|t| t * fs)
+            .collect();
+        let max_adv = advances.iter().fold(0.0_f64, |m, a| m.max(a.abs()));
+        // The largest inter-microphone delay must fit in a frame with room to spare.
+        let spread = (array.aperture_m() / self.sound_speed_mps * fs).ceil() as usize;
+        let engine = match self.method {
+            Method::TimeDomain => {
+                if self.weighting == Weighting::Phat {
+                    return Err(AudioError::Unsupported(
+                        "PHAT weighting needs the frequency-domain beamformer".into(),
+                    ));
+                }
+                if self.fir_taps.is_multiple_of(2) {
+                    return Err(Error::InvalidParameter {
+                        name: "fir_taps",
+                        reason: format!(
+                            "{} must be odd (a linear-phase FIR with an integer delay)",
+                            self.fir_taps
+                        ),
+                    }
+                    .into());
+                }
+                let half = self.interp_half_width;
+                if half == 0 {
+                    return Err(Error::InvalidParameter {
+                        name: "interp_half_width",
+                        reason: "must be at least 1".into(),
+                    }
+                    .into());
+                }
+                let margin = max_adv.ceil() as usize + half;
+                let required = self.fir_taps + 2 * margin + spread.max(1);
+                if self.frame_len < required {
+                    return Err(AudioError::FrameTooShort {
+                        frame_len: self.frame_len,
+                        required,
+                    });
+                }
+                let n_filtered = self.frame_len - self.fir_taps + 1;
+                let n_out = n_filtered - 2 * margin;
+                let mut taps = vec![0.0_f32; advances.len() * 2 * half];
+                let mut starts = Vec::with_capacity(advances.len());
+                let mut buf = vec![0.0; 2 * half];
+                for (k, a) in advances.iter().enumerate() {
+                    // Output n reads filtered position n + margin − a (a delay by the advance).
+                    let pos = margin as f64 - a;
+                    let i0 = pos.floor();
+                    fractional_taps(pos - i0, half, &mut buf);
+                    starts.push(i0 as usize + 1 - half);
+                    for (t, b) in taps[k * 2 * half..(k + 1) * 2 * half].iter_mut().zip(&buf) {
+                        *t = *b as f32;
+                    }
+                }
+                Engine::Time(TimeDomain {
+                    fir: bandpass_fir(self.fir_taps, lo, hi, fs)
+                        .into_iter()
+                        .map(|v| v as f32)
+                        .collect(),
+                    taps,
+                    starts,
+                    n_taps: 2 * half,
+                    n_out,
+                    filtered: vec![vec![0.0; n_filtered]; n_mics],
+                    beam: vec![0.0; n_out],
+                })
+            }
+            Method::FrequencyDomain => {
+                let required = 2 * spread + 2;
+                if self.frame_len < required {
+                    return Err(AudioError::FrameTooShort {
+                        frame_len: self.frame_len,
+                        required,
+                    });
+                }
+                let l = self.frame_len;
+                let fft = RealFftPlanner::<f64>::new().plan_fft_forward(l);
+                let window: Vec<f64> = match self.window {
+                    Window::Rectangular => vec![1.0; l],
+                    // Periodic Hann.
+                    Window::Hann => (0..l)
+                        .map(|i| 0.5 - 0.5 * (TAU * i as f64 / l as f64).cos())
+                        .collect(),
+                };
+                let w2: f64 = window.iter().map(|w| w * w).sum();
+                let df = fs / l as f64;
+                let first_bin = (lo / df).ceil() as usize;
+                let last_bin = ((hi / df).floor() as usize).min(l / 2);
+                if last_bin < first_bin {
+                    return Err(Error::InvalidParameter {
+                        name: "band_hz",
+                        reason: format!(
+                            "[{lo}, {hi}] contains no FFT bin of a {l}-sample frame ({df} Hz apart)"
+                        ),
+                    }
+                    .into());
+                }
+                let n_bins = last_bin - first_bin + 1;
+                let mut steer = Vec::with_capacity(self.n_beams * n_bins * n_mics);
+                for b in 0..self.n_beams {
+                    for k in first_bin..=last_bin {
+                        for m in 0..n_mics {
+                            let phase = -TAU * k as f64 / l as f64 * advances[b * n_mics + m];
+                            steer.push(Complex::from_polar(1.0, phase));
+                        }
+                    }
+                }
+                let bin_weight = (first_bin..=last_bin)
+                    .map(|k| {
+                        let edge = k == 0 || (l.is_multiple_of(2) && k == l / 2);
+                        (if edge { 1.0 } else { 2.0 }) / (l as f64 * w2)
+                    })
+                    .collect();
+                Engine::Freq(FreqDomain {
+                    input: fft.make_input_vec(),
+                    spectrum: fft.make_output_vec(),
+                    scratch: fft.make_scratch_vec(),
+                    fft,
+                    window,
+                    first_bin,
+                    n_bins,
+                    steer,
+                    bin_weight,
+                    band: vec![Complex::new(0.0, 0.0); n_bins * n_mics],
+                    phat: self.weighting == Weighting::Phat,
+                })
+            }
+        };
+        Ok(Beamformer {
+            config: self.clone(),
+            n_mics,
+            engine,
+        })
+    }
+}
+
+impl Beamformer {
+    /// The checked configuration.
+    pub fn config(&self) -> &BeamformConfig {
+        &self.config
+    }
+
+    /// Beam energies of one frame: one slice of exactly `frame_len` finite samples per
+    /// microphone, in the array's order. Written into `energies` (resized to B).
+    pub fn frame_energies_into(
+        &mut self,
+        channels: &[&[f32]],
+        energies: &mut Vec<f64>,
+    ) -> Result<()> {
+        check_channels(channels, Some(self.n_mics), Some(self.config.frame_len))?;
+        energies.clear();
+        energies.resize(self.config.n_beams, 0.0);
+        match &mut self.engine {
+            Engine::Time(td) => td.run(channels, energies),
+            Engine::Freq(fd) => fd.run(channels, energies),
+        }
+        Ok(())
+    }
+
+    /// Beam energies of one frame (see [`Beamformer::frame_energies_into`]).
+    pub fn frame_energies(&mut self, channels: &[&[f32]]) -> Result<Vec<f64>> {
+        let mut out = Vec::new();
+        self.frame_energies_into(channels, &mut out)?;
+        Ok(out)
+    }
+
+    /// Beamforms a whole recording: frames start every `hop` samples while a full frame fits;
+    /// each [`Beamform`] is time-stamped with its frame's centre.
+    pub fn beamform(&mut self, recording: &Recording) -> Result<Vec<Beamform>> {
+        recording.check()?;
+        if recording.sample_rate_hz != self.config.sample_rate_hz {
+            return Err(Error::InvalidParameter {
+                name: "sample_rate_hz",
+                reason: format!(
+                    "the recording is sampled at {} Hz but the beamformer was configured for {} Hz",
+                    recording.sample_rate_hz, self.config.sample_rate_hz
+                ),
+            }
+            .into());
+        }
+        if recording.n_channels() != self.n_mics {
+            return Err(AudioError::ChannelCountMismatch {
+                expected: self.n_mics,
+                got: recording.n_channels(),
+            });
+        }
+        let (l, hop) = (self.config.frame_len, self.config.hop);
+        let fs = f64::from(self.config.sample_rate_hz);
+        let mut out = Vec::new();
+        let mut start = 0;
+        while start + l <= recording.n_samples() {
+            let frame: Vec<&[f32]> = recording
+                .channels
+                .iter()
+                .map(|c| &c[start..start + l])
+                .collect();
+            let mut energies = Vec::new();
+            self.frame_energies_into(&frame, &mut energies)?;
+            out.push(Beamform {
+                time_s: recording.start_s + (start as f64 + l as f64 / 2.0) / fs,
+                energies,
+            });
+            start += hop;
+        }
+        Ok(out)
+    }
+}
+
+impl TimeDomain {
+    fn run(&mut self, channels: &[&[f32]], energies: &mut [f64]) {
+        // Band-pass each channel ("valid" part only: no invented samples at the frame edges).
+        for (z, x) in self.filtered.iter_mut().zip(channels) {
+            z.iter_mut().for_each(|v| *v = 0.0);
+            for (j, &h) in self.fir.iter().enumerate() {
+                let n = z.len();
+                for (zi, xi) in z.iter_mut().zip(&x[j..j + n]) {
+                    *zi += h * xi;
+                }
+            }
+        }
+        let n_mics = self.filtered.len();
+        let n_out = self.n_out;
+        for (b, e) in energies.iter_mut().enumerate() {
+            self.beam.iter_mut().for_each(|v| *v = 0.0);
+            for (m, z) in self.filtered.iter().enumerate() {
+                let k = b * n_mics + m;
+                let taps = &self.taps[k * self.n_taps..(k + 1) * self.n_taps];
+                let start = self.starts[k];
+                for (j, &t) in taps.iter().enumerate() {
+                    let src = &z[start + j..start + j + n_out];
+                    for (y, x) in self.beam.iter_mut().zip(src) {
+                        *y += t * x;
+                    }
+                }
+            }
+            let sum: f32 = self
+                .beam
+                .chunks(64)
+                .map(|c| c.iter().map(|v| v * v).sum::<f32>())
+                .sum();
+            *e = f64::from(sum) / n_out as f64;
+        }
+    }
+}
+
+impl FreqDomain {
+    fn run(&mut self, channels: &[&[f32]], energies: &mut [f64]) {
+        let n_mics = channels.len();
+        for (m, x) in channels.iter().enumerate() {
+            for ((inp, &xv), w) in self.input.iter_mut().zip(x.iter()).zip(&self.window) {
+                *inp = f64::from(xv) * w;
+            }
+            // Lengths come from the same plan, so the FFT cannot fail.
+            let _ = self.fft.process_with_scratch(
+                &mut self.input,
+                &mut self.spectrum,
+                &mut self.scratch,
+            );
+            for k in 0..self.n_bins {
+                let mut v = self.spectrum[self.first_bin + k];
+                if self.phat {
+                    // Unit magnitude per bin; a silent bin stays silent.
+                    let a = v.norm();
+                    v = if a > 1e-30 {
+                        v / a
+                    } else {
+                        Complex::new(0.0, 0.0)
+                    };
+                }
+                self.band[k * n_mics + m] = v;
+            }
+        }
+        let per_beam = self.n_bins * n_mics;
+        for (b, e) in energies.iter_mut().enumerate() {
+            let steer = &self.steer[b * per_beam..(b + 1) * per_beam];
+            let mut total = 0.0;
+            for k in 0..self.n_bins {
+                let s = &steer[k * n_mics..(k + 1) * n_mics];
+                let x = &self.band[k * n_mics..(k + 1) * n_mics];
+                let mut acc = Complex::new(0.0, 0.0);
+                for (a, c) in x.iter().zip(s) {
+                    acc += a * c;
+                }
+                total += self.bin_weight[k] * acc.norm_sqr();
+            }
+            *e = total;
+        }
+    }
+}
