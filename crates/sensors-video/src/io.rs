@@ -1,0 +1,294 @@
+//! Frame I/O: folders of PNG/PGM/PPM images (through the `image` crate) and YUV4MPEG2 streams
+//! (through the `y4m` crate), so that any video converts with
+//! `ffmpeg -i in.mp4 -pix_fmt yuv420p -f yuv4mpegpipe -`.
+//!
+//! Colour in y4m is Y'CbCr with BT.601 full-range coefficients (what ffmpeg writes for
+//! `yuvj*` and what most y4m tools assume); chroma planes of 4:2:0 and 4:2:2 streams are
+//! upsampled by pixel replication. `Cmono` streams read as grey frames, every other 8-bit
+//! stream as RGB; 10- and 12-bit streams are an [`Error::UnsupportedPixelFormat`].
+
+use std::cell::Cell;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+use crate::error::{Error, Result};
+use crate::frame::{PixelFormat, VideoFrame, check_sequence};
+
+fn image_err(path: &Path, e: &image::ImageError) -> Error {
+    Error::Image {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    }
+}
+
+/// Reads one PNG/PGM/PPM file as an 8-bit grey or RGB frame; any other pixel format (16-bit,
+/// alpha) is an [`Error::UnsupportedPixelFormat`], never silently converted.
+pub fn read_image(path: &Path) -> Result<VideoFrame> {
+    let img = image::ImageReader::open(path)
+        .map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .with_guessed_format()
+        .map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .decode()
+        .map_err(|e| match &e {
+            image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
+                Error::Truncated {
+                    source_name: path.display().to_string(),
+                    frame: 0,
+                }
+            }
+            image::ImageError::Decoding(d) if d.to_string().contains("unexpected end of file") => {
+                Error::Truncated {
+                    source_name: path.display().to_string(),
+                    frame: 0,
+                }
+            }
+            _ => image_err(path, &e),
+        })?;
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    match img {
+        image::DynamicImage::ImageLuma8(b) => {
+            VideoFrame::new(w, h, PixelFormat::Grey, b.into_raw())
+        }
+        image::DynamicImage::ImageRgb8(b) => VideoFrame::new(w, h, PixelFormat::Rgb, b.into_raw()),
+        other => Err(Error::UnsupportedPixelFormat {
+            format: format!("{:?}", other.color()),
+            source_name: path.display().to_string(),
+        }),
+    }
+}
+
+/// Writes a frame; the format follows the extension (`.png`, `.pgm`, `.ppm`).
+pub fn write_image(frame: &VideoFrame, path: &Path) -> Result<()> {
+    let colour = match frame.format() {
+        PixelFormat::Grey => image::ExtendedColorType::L8,
+        PixelFormat::Rgb => image::ExtendedColorType::Rgb8,
+    };
+    image::save_buffer(
+        path,
+        frame.data(),
+        frame.width() as u32,
+        frame.height() as u32,
+        colour,
+    )
+    .map_err(|e| image_err(path, &e))
+}
+
+/// Reads every `.png`, `.pgm` and `.ppm` file of a folder in file-name order. All frames must
+/// share the first one's size and format ([`Error::FrameChanged`] otherwise).
+pub fn read_image_sequence(dir: &Path) -> Result<Vec<VideoFrame>> {
+    let io = |source| Error::Io {
+        path: dir.to_path_buf(),
+        source,
+    };
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(io)?
+        .map(|e| e.map(|e| e.path()))
+        .collect::<std::io::Result<_>>()
+        .map_err(io)?;
+    paths.retain(|p| {
+        p.extension()
+            .and_then(|e| e.to_str())
+            .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "png" | "pgm" | "ppm"))
+    });
+    paths.sort();
+    if paths.is_empty() {
+        return Err(Error::EmptySequence {
+            path: dir.to_path_buf(),
+        });
+    }
+    let frames = paths
+        .iter()
+        .map(|p| read_image(p))
+        .collect::<Result<Vec<_>>>()?;
+    check_sequence(&frames)?;
+    Ok(frames)
+}
+
+/// Writes frames as `prefix000000.ext`, `prefix000001.ext`, … in `dir`.
+pub fn write_image_sequence(
+    frames: &[VideoFrame],
+    dir: &Path,
+    prefix: &str,
+    ext: &str,
+) -> Result<()> {
+    check_sequence(frames)?;
+    for (i, f) in frames.iter().enumerate() {
+        write_image(f, &dir.join(format!("{prefix}{i:06}.{ext}")))?;
+    }
+    Ok(())
+}
+
+/// Counts the bytes that pass, so that a stream ending inside a frame (which the `y4m` crate
+/// reports as a plain end of file) can be told from one ending between frames.
+struct CountingReader<R> {
+    inner: R,
+    count: Rc<Cell<u64>>,
+}
+
+impl<R: Read> Read for CountingReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.count.set(self.count.get() + n as u64);
+        Ok(n)
+    }
+}
+
+/// BT.601 full-range Y'CbCr → RGB, rounded and clamped.
+fn ycbcr_to_rgb(y: u8, cb: u8, cr: u8) -> [u8; 3] {
+    let (y, cb, cr) = (f32::from(y), f32::from(cb) - 128.0, f32::from(cr) - 128.0);
+    let c = |v: f32| v.round().clamp(0.0, 255.0) as u8;
+    [
+        c(y + 1.402 * cr),
+        c(y - 0.344_136 * cb - 0.714_136 * cr),
+        c(y + 1.772 * cb),
+    ]
+}
+
+/// RGB → BT.601 full-range Y'CbCr, rounded and clamped.
+fn rgb_to_ycbcr(p: &[u8]) -> [u8; 3] {
+    let (r, g, b) = (f32::from(p[0]), f32::from(p[1]), f32::from(p[2]));
+    let c = |v: f32| v.round().clamp(0.0, 255.0) as u8;
+    let y = 0.299 * r + 0.587 * g + 0.114 * b;
+    [c(y), c(128.0 + (b - y) / 1.772), c(128.0 + (r - y) / 1.402)]
+}
+
+/// Reads a whole YUV4MPEG2 stream. `source_name` labels errors.
+pub fn read_y4m<R: Read>(reader: R, source_name: &str) -> Result<Vec<VideoFrame>> {
+    let count = Rc::new(Cell::new(0));
+    let counting = CountingReader {
+        inner: reader,
+        count: Rc::clone(&count),
+    };
+    let y4m_err = |e: &y4m::Error| Error::Y4m {
+        source_name: source_name.to_string(),
+        reason: e.to_string(),
+    };
+    let mut dec = match y4m::decode(counting) {
+        Ok(d) => d,
+        Err(y4m::Error::EOF) => {
+            return Err(Error::Truncated {
+                source_name: source_name.to_string(),
+                frame: 0,
+            });
+        }
+        Err(e) => return Err(y4m_err(&e)),
+    };
+    let (w, h) = (dec.get_width(), dec.get_height());
+    if w == 0 || h == 0 {
+        return Err(Error::ZeroSize {
+            width: w,
+            height: h,
+        });
+    }
+    let cs = dec.get_colorspace();
+    // Chroma subsampling as (horizontal, vertical) shifts.
+    let (sx, sy, grey) = match cs {
+        y4m::Colorspace::Cmono => (0, 0, true),
+        y4m::Colorspace::C420
+        | y4m::Colorspace::C420jpeg
+        | y4m::Colorspace::C420paldv
+        | y4m::Colorspace::C420mpeg2 => (1, 1, false),
+        y4m::Colorspace::C422 => (1, 0, false),
+        y4m::Colorspace::C444 => (0, 0, false),
+        other => {
+            return Err(Error::UnsupportedPixelFormat {
+                format: format!("{other:?}"),
+                source_name: source_name.to_string(),
+            });
+        }
+    };
+    let cw = (w + (1 << sx) - 1) >> sx;
+    let mut frames = Vec::new();
+    loop {
+        let before = count.get();
+        let f = match dec.read_frame() {
+            Ok(f) => f,
+            Err(y4m::Error::EOF) if count.get() == before => break,
+            Err(y4m::Error::EOF) => {
+                return Err(Error::Truncated {
+                    source_name: source_name.to_string(),
+                    frame: frames.len(),
+                });
+            }
+            Err(e) => return Err(y4m_err(&e)),
+        };
+        let yp = f.get_y_plane();
+        let frame = if grey {
+            VideoFrame::new(w, h, PixelFormat::Grey, yp.to_vec())?
+        } else {
+            let (up, vp) = (f.get_u_plane(), f.get_v_plane());
+            let mut data = Vec::with_capacity(w * h * 3);
+            for y in 0..h {
+                for x in 0..w {
+                    let ci = (y >> sy) * cw + (x >> sx);
+                    data.extend_from_slice(&ycbcr_to_rgb(yp[y * w + x], up[ci], vp[ci]));
+                }
+            }
+            VideoFrame::new(w, h, PixelFormat::Rgb, data)?
+        };
+        frames.push(frame);
+    }
+    Ok(frames)
+}
+
+/// Writes frames as YUV4MPEG2 at `fps` frames per second: grey frames as `Cmono`, RGB frames as
+/// `C444` (BT.601 full range; a round trip moves a channel by at most 2 levels).
+pub fn write_y4m<W: Write>(
+    frames: &[VideoFrame],
+    fps: usize,
+    writer: W,
+    source_name: &str,
+) -> Result<()> {
+    check_sequence(frames)?;
+    let Some(first) = frames.first() else {
+        return Err(Error::Y4m {
+            source_name: source_name.to_string(),
+            reason: "no frames to write".to_string(),
+        });
+    };
+    let y4m_err = |e: &y4m::Error| Error::Y4m {
+        source_name: source_name.to_string(),
+        reason: e.to_string(),
+    };
+    let cs = match first.format() {
+        PixelFormat::Grey => y4m::Colorspace::Cmono,
+        PixelFormat::Rgb => y4m::Colorspace::C444,
+    };
+    let mut enc = y4m::encode(
+        first.width(),
+        first.height(),
+        y4m::Ratio::new(fps.max(1), 1),
+    )
+    .with_colorspace(cs)
+    .write_header(writer)
+    .map_err(|e| y4m_err(&e))?;
+    let empty: &[u8] = &[];
+    for f in frames {
+        match f.format() {
+            PixelFormat::Grey => enc.write_frame(&y4m::Frame::new([f.data(), empty, empty], None)),
+            PixelFormat::Rgb => {
+                let n = f.width() * f.height();
+                let mut planes = vec![0u8; 3 * n];
+                for (i, p) in f.data().chunks_exact(3).enumerate() {
+                    let [y, u, v] = rgb_to_ycbcr(p);
+                    planes[i] = y;
+                    planes[n + i] = u;
+                    planes[2 * n + i] = v;
+                }
+                enc.write_frame(&y4m::Frame::new(
+                    [&planes[..n], &planes[n..2 * n], &planes[2 * n..]],
+                    None,
+                ))
+            }
+        }
+        .map_err(|e| y4m_err(&e))?;
+    }
+    Ok(())
+}
