@@ -194,6 +194,85 @@ impl OnlineTracker {
         })
     }
 
+    /// The current window's MAP tracks with their persistent labels (measurement ids in scan
+    /// order), as of the last [`Self::push_scan`].
+    pub fn map_tracks(&self) -> &[(u64, Vec<MeasId>)] {
+        &self.map
+    }
+
+    /// The scans of the current window (indices into [`Self::problem`]); `None` before the
+    /// first scan.
+    pub fn window(&self) -> Option<std::ops::RangeInclusive<usize>> {
+        let hi = *self.problem.all_scans().ok()?.end();
+        Some(self.window_start()..=hi)
+    }
+
+    /// Per-sample associations for identity management (the mixing matrices of Oh, Hwang &
+    /// Sastry 2008): runs `n_samples` further MCMC steps on the current window, starting from
+    /// its MAP, and for every sample lists the pairs (i, j) such that `pre[i]` and `post[j]`
+    /// lie on the same track. Where several listed pieces share a track, only the adjacent
+    /// ones are joined (the latest pre piece before the earliest post piece after it), so
+    /// each piece is in at most one pair per sample, as
+    /// `identity_mgmt::Continuation::from_samples` expects. The chain draws from this
+    /// tracker's generator and leaves the MAP unchanged. Every piece must lie in the window
+    /// ([`Error::MeasurementOutsideWindow`] otherwise).
+    pub fn sample_joins(
+        &mut self,
+        pre: &[MeasId],
+        post: &[MeasId],
+        n_samples: u64,
+    ) -> Result<Vec<Vec<(usize, usize)>>> {
+        let window = self.problem.all_scans()?;
+        let (lo, hi) = (self.window_start(), *window.end());
+        for (k, &m) in pre.iter().chain(post).enumerate() {
+            if !self.problem.contains(m) {
+                return Err(Error::UnknownMeasurement { track: k, id: m });
+            }
+            if self.problem.scan_of(m) < lo {
+                return Err(Error::MeasurementOutsideWindow { track: k, id: m });
+            }
+        }
+        let tracks: Vec<Vec<MeasId>> = self.map.iter().map(|(_, t)| t.clone()).collect();
+        let start = Partition::from_tracks(&self.model, &self.problem, lo..=hi, &tracks)?;
+        let problem = &self.problem;
+        let mut chain = Chain::new(start, &mut self.rng);
+        let mut samples = Vec::with_capacity(usize::try_from(n_samples).unwrap_or(0));
+        for _ in 0..n_samples {
+            chain.step();
+            let state = chain.state();
+            // For every track holding pieces: (scan, is_post, index), joined where a pre
+            // piece is immediately followed by a post piece in time.
+            let mut by_track: BTreeMap<usize, Vec<(usize, bool, usize)>> = BTreeMap::new();
+            for (i, &m) in pre.iter().enumerate() {
+                if let Some(t) = state.track_of(m) {
+                    by_track
+                        .entry(t)
+                        .or_default()
+                        .push((problem.scan_of(m), false, i));
+                }
+            }
+            for (j, &m) in post.iter().enumerate() {
+                if let Some(t) = state.track_of(m) {
+                    by_track
+                        .entry(t)
+                        .or_default()
+                        .push((problem.scan_of(m), true, j));
+                }
+            }
+            let mut pairs = Vec::new();
+            for pieces in by_track.values_mut() {
+                pieces.sort_unstable();
+                for w in pieces.windows(2) {
+                    if let [(_, false, i), (_, true, j)] = w {
+                        pairs.push((*i, *j));
+                    }
+                }
+            }
+            samples.push(pairs);
+        }
+        Ok(samples)
+    }
+
     /// Makes the current MAP's associations in `scans` final.
     fn commit(&mut self, scans: std::ops::RangeInclusive<usize>) {
         self.open_from = self.open_from.max(scans.end() + 1);

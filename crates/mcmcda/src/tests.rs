@@ -1182,3 +1182,54 @@ fn gnn_deletes_a_track_after_its_largest_gap() {
     };
     assert!(bad.check().is_err());
 }
+
+/// `sample_joins` on three well-separated walkers: in every sample each walker's earlier
+/// piece is joined to its own later piece (the posterior puts essentially all mass on the
+/// right partition), never to another's; pieces outside the window are an error.
+#[test]
+fn sample_joins_follow_separated_walkers() {
+    use crate::{MeasId, OnlineConfig, OnlineTracker};
+    let scans = three_walkers(12, &[]);
+    let model = McmcdaConfig::default().check().unwrap();
+    let config = OnlineConfig {
+        window: 6,
+        samples_per_scan: 300,
+        ..OnlineConfig::default()
+    };
+    let mut tracker = OnlineTracker::new(model, 0, config, 9).unwrap();
+    for s in &scans {
+        let points: Vec<Vector2<f64>> = s.measurements.iter().map(|m| m.value).collect();
+        tracker.push_scan(s.frame, &points).unwrap();
+    }
+    let window = tracker.window().unwrap();
+    let p = tracker.problem();
+    let pre: Vec<MeasId> = p.scan(*window.start() + 1).to_vec();
+    let post: Vec<MeasId> = p.scan(*window.end()).to_vec();
+    assert_eq!((pre.len(), post.len()), (3, 3));
+    // The walker of each piece, from its starting x (100, 500 or 800; x grows 20 per scan).
+    let walker =
+        |m: MeasId| ((p.position(m).x - 20.0 * p.scan_of(m) as f64) / 100.0).round() as i64;
+    let expected: Vec<(usize, usize)> = (0..3)
+        .flat_map(|i| (0..3).map(move |j| (i, j)))
+        .filter(|&(i, j)| walker(pre[i]) == walker(post[j]))
+        .collect();
+    assert_eq!(expected.len(), 3);
+    let (pre_c, post_c) = (pre.clone(), post.clone());
+    let samples = tracker.sample_joins(&pre_c, &post_c, 200).unwrap();
+    assert_eq!(samples.len(), 200);
+    for s in &samples {
+        let mut sorted = s.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, expected);
+    }
+    assert_eq!(tracker.map_tracks().len(), 3);
+    let old = p_scan_zero(&tracker);
+    assert!(matches!(
+        tracker.sample_joins(&[old], &post_c, 10),
+        Err(Error::MeasurementOutsideWindow { .. })
+    ));
+}
+
+fn p_scan_zero(tracker: &crate::OnlineTracker) -> crate::MeasId {
+    tracker.problem().scan(0)[0]
+}
