@@ -5,19 +5,25 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use eval_metrics::{EvalConfig, EvalReport, MatchConfig, evaluate};
-use scenarios::mot::parse_evaluation_pair;
+use scenarios::mot::{EvaluationPair, load_evaluation_pair};
 use scenarios::{Table, fmt_num};
-use tracker_model::TrackSet;
 
 use crate::report::to_markdown;
 use crate::{Outcome, read_file};
 
-/// Reads ground truth and tracker output (see `parse_evaluation_pair` for the conventions).
-fn load(gt: &Path, pred: &Path) -> Result<(TrackSet, TrackSet)> {
-    parse_evaluation_pair(
+/// Reads ground truth and tracker output (see `scenarios::mot` for the conventions: empty
+/// ground truth is an error, empty predictions and skipped headers come with notes).
+fn load_with_notes(gt: &Path, pred: &Path) -> Result<EvaluationPair> {
+    load_evaluation_pair(
         (&read_file(gt)?, &gt.display().to_string()),
         (&read_file(pred)?, &pred.display().to_string()),
     )
+}
+
+/// [`load_with_notes`] without the notes.
+#[cfg(test)]
+fn load(gt: &Path, pred: &Path) -> Result<(tracker_model::TrackSet, tracker_model::TrackSet)> {
+    load_with_notes(gt, pred).map(|p| (p.gt, p.pred))
 }
 
 /// The metrics of the table, in order.
@@ -160,14 +166,22 @@ fn parse_requirements(text: &str) -> Result<Vec<Requirement>> {
 /// Runs the evaluation and prints a table or JSON; with `require`, false when a threshold fails.
 #[expect(
     clippy::print_stdout,
-    reason = "the evaluation is printed on the terminal"
+    clippy::print_stderr,
+    reason = "the evaluation is printed on the terminal, notes on stderr"
 )]
 pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool, require: Option<&str>) -> Outcome {
     let requirements = require
         .map(parse_requirements)
         .transpose()?
         .unwrap_or_default();
-    let (gt_set, pred_set) = load(gt, pred)?;
+    let EvaluationPair {
+        gt: gt_set,
+        pred: pred_set,
+        notes,
+    } = load_with_notes(gt, pred)?;
+    for note in &notes {
+        eprintln!("note: {note}");
+    }
     let config = EvalConfig {
         matching: MatchConfig::iou(iou),
     };
@@ -235,6 +249,32 @@ mod tests {
         std::fs::write(&bad, "1,1,0,0,10,10,1\n1,2,50,0,10,10,0\n").unwrap();
         let (g, _) = load(&bad, &gt).unwrap();
         assert_eq!(g.n_points(), 1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn empty_files_get_an_error_or_a_note() {
+        let dir = std::env::temp_dir().join(format!("xtask-eval-empty-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (gt, empty) = (dir.join("gt.txt"), dir.join("empty.txt"));
+        std::fs::write(&gt, "1,1,0,0,10,10,1,-1,-1,-1\n").unwrap();
+        std::fs::write(&empty, "").unwrap();
+        // Empty ground truth: an error (it used to score MOTA −90 against nothing).
+        let err = format!("{:#}", run(&empty, &gt, 0.5, true, None).unwrap_err());
+        assert!(
+            err.contains("empty.txt") && err.contains("no ground truth"),
+            "{err}"
+        );
+        // Empty predictions: scored, all missed, with a note.
+        let pair = load_with_notes(&gt, &empty).unwrap();
+        assert!(pair.notes[0].contains("no tracks"), "{:?}", pair.notes);
+        let report = evaluate(&pair.gt, &pair.pred, &EvalConfig::default()).unwrap();
+        assert_eq!(report.clear.false_negatives, 1);
+        assert!(report.clear.mota.abs() < 1e-12, "{}", report.clear.mota);
+        // A zero-area box is an error at parse time (it used to count as FP 1, FN 1).
+        std::fs::write(&empty, "1,1,0,0,0,10\n").unwrap();
+        let err = format!("{:#}", run(&gt, &empty, 0.5, true, None).unwrap_err());
+        assert!(err.contains("zero area") && err.contains("line 1"), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

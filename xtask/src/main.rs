@@ -12,6 +12,7 @@ use clap::{Parser, Subcommand};
 
 mod ci;
 mod eval;
+mod fuzz;
 mod junit;
 mod plot;
 mod report;
@@ -41,6 +42,10 @@ enum Command {
         /// Also write the verdicts as JUnit XML to this file, for CI dashboards.
         #[arg(long)]
         junit: Option<PathBuf>,
+        /// Also write every scenario's metrics as JSON to this file (the CI determinism step
+        /// compares it across thread counts).
+        #[arg(long, hide = true)]
+        metrics_out: Option<PathBuf>,
     },
     /// Run the scenarios, print each section's tables, and write the HTML and Markdown report.
     Report {
@@ -55,31 +60,53 @@ enum Command {
         #[arg(long)]
         screenshots: bool,
     },
-    /// fmt, clippy, tests, docs, bench build and the scenario suite: what CI runs.
-    Ci,
+    /// fmt, clippy, tests, docs, bench build, the determinism check and the scenario suite:
+    /// what CI runs.
+    Ci {
+        /// Only the determinism step (the tracker CLIs and a few scenarios at 1 and 2
+        /// threads, outputs compared byte for byte).
+        #[arg(long)]
+        determinism_only: bool,
+    },
+    /// Run the cargo-fuzz targets under fuzz/ (needs the nightly toolchain; installs
+    /// cargo-fuzz when missing) and print the executions of each.
+    Fuzz {
+        /// Seconds per target.
+        #[arg(long, default_value_t = 60)]
+        seconds: u64,
+        /// Only the targets whose name contains this text.
+        #[arg(long)]
+        filter: Option<String>,
+    },
     /// Track MOTChallenge detections and write MOTChallenge tracks. Without --config each
     /// tracker's model is scaled to the detections' median box size.
     Track {
         /// mcmcda: online sliding-window MCMCDA on the box centres; gnn: global nearest
         /// neighbour with M-of-N confirmation on the box centres (both output smoothed centres
         /// with each track's mean detection size); phd: SMC-PHD on the boxes themselves.
-        #[arg(long)]
-        tracker: scenarios::track::Tracker,
+        #[arg(long, required_unless_present = "print_config")]
+        tracker: Option<scenarios::track::Tracker>,
         /// Detections (frame,id,left,top,width,height,conf,...).
-        #[arg(long)]
-        input: PathBuf,
+        #[arg(long, required_unless_present = "print_config")]
+        input: Option<PathBuf>,
         /// Where to write the tracks.
-        #[arg(long)]
-        out: PathBuf,
-        /// TOML with optional `[model]` (fields of `mcmcda::McmcdaConfig`, overriding a model
-        /// scaled to the median box width), `[online]`, `[gnn]` and `[phd]` (fields of
-        /// `phd_filter::PhdConfig`) tables.
+        #[arg(long, required_unless_present = "print_config")]
+        out: Option<PathBuf>,
+        /// TOML with optional `[model]` (MCMCDA's and GNN's model, overriding a model scaled
+        /// to the median box width), `[online]`, `[gnn]` and `[phd]` (overriding a PHD model
+        /// scaled to the boxes) tables; every table present is checked. See --print-config
+        /// and fixtures/configs/.
         #[arg(long)]
         config: Option<PathBuf>,
         /// Seed of the tracker's random generator (MCMCDA's chains, the PHD filter's
         /// particles; GNN draws nothing).
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Print the effective configuration (every key, its value and a comment) as TOML
+        /// that --config loads, and exit: the tables of --tracker (all without it), scaled to
+        /// --input's boxes when given, with --config applied.
+        #[arg(long)]
+        print_config: bool,
     },
     /// Score a tracker's MOTChallenge output against MOTChallenge ground truth.
     Eval {
@@ -109,7 +136,13 @@ fn main() -> ExitCode {
             bless,
             filter,
             junit,
-        } => scenario::run_suite(filter.as_deref(), bless, junit.as_deref()),
+            metrics_out,
+        } => scenario::run_suite(
+            filter.as_deref(),
+            bless,
+            junit.as_deref(),
+            metrics_out.as_deref(),
+        ),
         Command::Report {
             out,
             filter,
@@ -119,14 +152,23 @@ fn main() -> ExitCode {
             filter.as_deref(),
             screenshots,
         ),
-        Command::Ci => ci::run(),
+        Command::Ci { determinism_only } => ci::run(determinism_only),
+        Command::Fuzz { seconds, filter } => fuzz::run(seconds, filter.as_deref()),
         Command::Track {
             tracker,
             input,
             out,
             config,
             seed,
-        } => track::run(tracker, &input, &out, config.as_deref(), seed),
+            print_config,
+        } => track::run(&track::Request {
+            tracker,
+            input: input.as_deref(),
+            out: out.as_deref(),
+            config: config.as_deref(),
+            seed,
+            print_config,
+        }),
         Command::Eval {
             gt,
             pred,

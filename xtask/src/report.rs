@@ -70,7 +70,7 @@ fn html_escape(s: &str) -> String {
 
 /// The papers (and the foundations) the scenarios belong to, by pipeline-name prefix: the
 /// report has one page per entry, in this order.
-const PAPERS: [(&str, &str, &str); 6] = [
+const PAPERS: [(&str, &str, &str); 9] = [
     (
         "kalman",
         "foundations",
@@ -80,6 +80,21 @@ const PAPERS: [(&str, &str, &str); 6] = [
         "mcmcda",
         "mcmcda",
         "Oh, Russell & Sastry 2009: Markov chain Monte Carlo data association",
+    ),
+    (
+        "dmtim",
+        "identity",
+        "Oh, Hwang & Sastry 2008: distributed tracking with identity management",
+    ),
+    (
+        "audio",
+        "audio",
+        "Kushwaha et al. 2008: audio beamforming and bearing likelihoods",
+    ),
+    (
+        "video",
+        "video",
+        "Kushwaha et al. 2008: video background subtraction and angle profiles",
     ),
     (
         "hmm",
@@ -105,20 +120,13 @@ const PAPERS: [(&str, &str, &str); 6] = [
 
 /// The (page slug, page title) of a pipeline.
 fn paper_of(pipeline: &str) -> (&'static str, &'static str) {
-    PAPERS
+    let (_, slug, title) = PAPERS
         .iter()
         .find(|(prefix, _, _)| pipeline.starts_with(prefix))
-        .map_or(PAPERS[0], |p| *p)
-        .pipe(|(_, slug, title)| (slug, title))
+        .copied()
+        .unwrap_or(PAPERS[0]);
+    (slug, title)
 }
-
-/// `x.pipe(f)` = `f(x)`, to keep a chain readable.
-trait Pipe: Sized {
-    fn pipe<T>(self, f: impl FnOnce(Self) -> T) -> T {
-        f(self)
-    }
-}
-impl<T> Pipe for T {}
 
 /// `cargo xtask report`.
 #[expect(

@@ -11,68 +11,11 @@ use anyhow::{Context, Result, anyhow, bail};
 use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use scenarios::{Clock, Env, Inputs, Metrics, Progress, Run};
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
 use crate::{Outcome, read_file, workspace_root};
 
-/// One scenario file.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ScenarioFile {
-    /// Which pipeline runs it (see `scenarios::pipeline_names`).
-    pub pipeline: String,
-    /// Seed of the scenario's generator.
-    pub seed: u64,
-    /// One sentence on what the scenario pins.
-    #[serde(default)]
-    pub description: String,
-    /// Pipeline parameters, read by the pipeline into its own config struct.
-    #[serde(default)]
-    pub params: toml::Table,
-    /// How far each metric may move before it counts as a regression.
-    #[serde(default)]
-    pub tolerance: Tolerances,
-}
-
-/// Tolerances: a default and per-metric overrides.
-#[derive(Debug, Clone, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Tolerances {
-    /// Applies to every metric without an override.
-    #[serde(default)]
-    pub default: Tolerance,
-    /// Per-metric overrides.
-    #[serde(default)]
-    pub metrics: BTreeMap<String, Tolerance>,
-}
-
-/// |actual − expected| ≤ abs + rel·|expected|.
-#[derive(Debug, Clone, Copy, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Tolerance {
-    /// Absolute part.
-    #[serde(default)]
-    pub abs: f64,
-    /// Relative part.
-    #[serde(default)]
-    pub rel: f64,
-}
-
-impl Default for Tolerance {
-    fn default() -> Self {
-        // Same seed, same code: only libm differences across platforms should move a metric.
-        Self {
-            abs: 1e-12,
-            rel: 1e-9,
-        }
-    }
-}
-
-impl Tolerance {
-    fn accepts(&self, actual: f64, expected: f64) -> bool {
-        (actual - expected).abs() <= self.abs + self.rel * expected.abs()
-    }
-}
+pub use xtask::inputs::ScenarioFile;
 
 /// A scenario with its name (the file stem).
 #[derive(Debug, Clone)]
@@ -166,17 +109,7 @@ pub fn load_all(filter: Option<&str>) -> Result<Vec<Scenario>> {
 
 fn load_file(path: &Path) -> Result<ScenarioFile> {
     let text = fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    let file: ScenarioFile =
-        toml::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
-    if !scenarios::is_pipeline(&file.pipeline) {
-        bail!(
-            "{}: unknown pipeline {:?}; known: {}",
-            path.display(),
-            file.pipeline,
-            scenarios::pipeline_names().join(", ")
-        );
-    }
-    Ok(file)
+    xtask::inputs::load_scenario(&text, &path.display().to_string())
 }
 
 /// Runs scenarios in parallel (each on its own seeded generator), returning results in name
@@ -259,6 +192,23 @@ fn bless(scenario: &Scenario, metrics: &Metrics) -> Result<()> {
     }
     let text = serde_json::to_string_pretty(&Sorted(metrics))? + "\n";
     fs::write(&path, text).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Writes every scenario's metrics (or its error) as JSON with sorted keys: the file the CI
+/// determinism step compares across thread counts.
+fn write_metrics(results: &[RunResult], path: &Path) -> Result<()> {
+    let all: BTreeMap<&str, serde_json::Value> = results
+        .iter()
+        .map(|r| {
+            let value = match &r.output {
+                Ok(out) => serde_json::to_value(&out.metrics),
+                Err(err) => Ok(serde_json::Value::String(format!("error: {err:#}"))),
+            };
+            value.map(|v| (r.scenario.name.as_str(), v))
+        })
+        .collect::<Result<_, _>>()?;
+    fs::write(path, serde_json::to_string_pretty(&all)? + "\n")
+        .with_context(|| format!("writing {}", path.display()))
 }
 
 /// How one scenario fared.
@@ -350,10 +300,18 @@ pub fn print_verdicts(verdicts: &[Verdict], bless_results: bool) -> bool {
 
 /// `cargo xtask scenarios`.
 #[expect(clippy::print_stdout, reason = "the suite reports on the terminal")]
-pub fn run_suite(filter: Option<&str>, bless_results: bool, junit: Option<&Path>) -> Outcome {
+pub fn run_suite(
+    filter: Option<&str>,
+    bless_results: bool,
+    junit: Option<&Path>,
+    metrics_out: Option<&Path>,
+) -> Outcome {
     let scenarios = load_all(filter)?;
     let n = scenarios.len();
     let results = run_all(scenarios);
+    if let Some(path) = metrics_out {
+        write_metrics(&results, path)?;
+    }
     let verdicts = verdicts(&results, bless_results)?;
     let ok = print_verdicts(&verdicts, bless_results);
     if let Some(path) = junit {

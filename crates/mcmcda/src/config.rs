@@ -88,7 +88,8 @@ pub enum TrackInit {
     /// the second measurement scored with its (zero) innovation, and each track paying the
     /// density 1/(π v̄²) of its initial velocity.
     TwoPoint {
-        /// P₀ (the authors use the identity).
+        /// P₀ (the authors use the identity); rows in files (`tracker_model::matrix_rows`).
+        #[serde(with = "tracker_model::matrix_rows")]
         initial_covariance: Matrix4<f64>,
     },
 }
@@ -139,7 +140,9 @@ pub struct McmcdaConfig {
     pub p_detect: f64,
     /// Target motion; its sampling period is the scan period T_s.
     pub motion: ConstantVelocity2,
-    /// Position-measurement noise covariance R.
+    /// Position-measurement noise covariance R; rows in files, `[[r, 0.0], [0.0, r]]`
+    /// (`tracker_model::matrix_rows`).
+    #[serde(with = "tracker_model::matrix_rows")]
     pub measurement_noise: Matrix2<f64>,
     /// d̄: the most scans between two consecutive measurements of one track.
     pub max_gap: u32,

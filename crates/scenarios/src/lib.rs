@@ -257,6 +257,11 @@ fn run_typed<P: Pipeline>(params: &toml::Table, seed: u64, env: &Env<'_>) -> Res
 
 /// Every pipeline by the name a scenario file gives it.
 const PIPELINES: &[(&str, RunFn)] = &[
+    ("audio-doa", run_typed::<pipelines::audio::AudioDoa>),
+    (
+        "dmtim-seven-radars",
+        run_typed::<pipelines::dmtim::DmtimSevenRadars>,
+    ),
     ("gdt-gaps", run_typed::<pipelines::gdt::GdtGaps>),
     ("hmm-tracking", run_typed::<pipelines::hmm::HmmTracking>),
     (
@@ -276,6 +281,7 @@ const PIPELINES: &[(&str, RunFn)] = &[
         "simulator-poisson",
         run_typed::<pipelines::simulator::SimulatorPoisson>,
     ),
+    ("video-mog", run_typed::<pipelines::video::VideoMog>),
 ];
 
 /// Whether a pipeline of this name exists.

@@ -47,6 +47,21 @@ pub enum Error {
         /// What is wrong with the line.
         reason: String,
     },
+    /// A MOTChallenge row whose box has zero width or height. Such a box has no area, so its
+    /// IoU with anything, itself included, is undefined (0/0); it is rejected where it is read
+    /// instead of silently matching nothing.
+    #[error(
+        "line {line}: the box has zero area (width {width}, height {height}); MOTChallenge \
+         boxes need a positive width and height"
+    )]
+    ZeroAreaBox {
+        /// 1-based line number in the input.
+        line: usize,
+        /// The box width.
+        width: f64,
+        /// The box height.
+        height: f64,
+    },
     /// Reading from the caller's reader failed.
     #[error("read failed: {0}")]
     Io(String),

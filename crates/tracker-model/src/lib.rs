@@ -11,7 +11,9 @@
 //!   exact over a gap of k scans), [`RandomWalk`], [`LinearTransition`], [`LinearObservation`]
 //!   with position-only and full-state shortcuts.
 //! * Geometry: [`Region`] (with its volume V), [`BoundingBox`] with IoU, [`bearing_rad`].
-//! * [`LikelihoodGrid`]: normalisation, weighted-sum and product fusion, peak extraction.
+//! * [`LikelihoodGrid`]: normalisation, weighted-sum and product fusion, peak extraction;
+//!   [`BearingProfile`]s (audio beamforms, video angle profiles) at a [`SensorPose`] projected
+//!   onto a grid.
 //! * [`Scan`]s of [`Measurement`]s with their hidden [`Origin`], and the [`Track`] /
 //!   [`TrackSet`] output type that every tracker returns and every metric reads.
 //! * The MCMCDA scenario [`SimulationConfig`] → [`Simulator`] (Oh, Russell & Sastry 2009).
@@ -49,6 +51,7 @@
 //! the generator the caller passes in.
 
 pub mod assignment;
+mod bearing;
 mod consistency;
 mod detector;
 mod error;
@@ -56,6 +59,7 @@ mod gaussian;
 mod geometry;
 mod grid;
 mod kalman;
+pub mod matrix_rows;
 mod models;
 mod mot;
 mod simulate;
@@ -64,6 +68,7 @@ mod track;
 #[cfg(test)]
 mod tests;
 
+pub use bearing::{BearingProfile, GridNormalisation, ProjectionConfig, SensorPose};
 pub use consistency::{GATE_CHI2_2D, anees_interval_95, chi_square_quantile_wh};
 pub use detector::{LocalDetector, LocalDetectorFactory};
 pub use error::{
@@ -81,7 +86,7 @@ pub use models::{
     LinearTransition, ObservationModel, PositionMeasurement2, RandomWalk, TransitionModel, Updated,
     full_state_measurement, position_measurement,
 };
-pub use mot::{MotRow, format_mot, parse_mot};
+pub use mot::{MotFile, MotRow, format_mot, parse_mot, read_mot};
 pub use simulate::{Simulation, SimulationConfig, Simulator};
 pub use track::{
     Frame, FrameClock, Location, Measurement, Origin, Scan, Track, TrackId, TrackPoint, TrackSet,

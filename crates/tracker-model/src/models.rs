@@ -165,7 +165,9 @@ pub enum CvNoise {
     /// The MCMCDA paper's discrete form Q(Δ) = G(Δ) Σ G(Δ)ᵀ with G = [[Δ²/2, 0], [0, Δ²/2],
     /// [Δ, 0], [0, Δ]] (TAC 2009 §V); over a gap the authors rebuild G with Δ = k·T_s.
     Discrete {
-        /// Σ, the covariance of the 2-D acceleration noise w.
+        /// Σ, the covariance of the 2-D acceleration noise w (rows in files, see
+        /// [`crate::matrix_rows`]).
+        #[serde(with = "crate::matrix_rows")]
         acceleration_covariance: Matrix2<f64>,
     },
 }

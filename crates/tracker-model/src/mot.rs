@@ -4,6 +4,12 @@
 //! missing trailing ones take the MOTChallenge defaults (conf = 1, x = y = z = −1). MOT16/17
 //! ground truth reuses columns 8 and 9 for class and visibility; they are kept as `world`
 //! values and left to the caller to interpret.
+//!
+//! Bad input: a malformed row is an [`Error::Parse`] naming its line; a box of zero width or
+//! height is an [`Error::ZeroAreaBox`] (its IoU is 0/0, so it could never match, not even
+//! itself). A header line (the first non-blank line when none of its fields is a number, e.g.
+//! `frame,id,bb_left,...`) is skipped and returned in [`MotFile::header`] so that the caller can
+//! say so.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -49,10 +55,22 @@ impl fmt::Display for MotRow {
     }
 }
 
-/// Parses every row of a MOTChallenge file. Blank lines are skipped; anything else that is not a
-/// valid row is an error naming its 1-based line number and the problem.
-pub fn parse_mot<R: BufRead>(reader: R) -> Result<Vec<MotRow>> {
-    let mut rows = Vec::new();
+/// What [`read_mot`] found: the rows and the header line it skipped, if any.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct MotFile {
+    /// Every row, in file order.
+    pub rows: Vec<MotRow>,
+    /// The skipped header: its 1-based line number and text.
+    pub header: Option<(usize, String)>,
+}
+
+/// Parses every row of a MOTChallenge file. Blank lines are skipped, and so is a header (the
+/// first non-blank line, when none of its comma-separated fields is a number), which is
+/// returned; anything else that is not a valid row is an error naming its 1-based line number
+/// and the problem.
+pub fn read_mot<R: BufRead>(reader: R) -> Result<MotFile> {
+    let mut file = MotFile::default();
+    let mut first = true;
     for (idx, line) in reader.lines().enumerate() {
         let line_no = idx + 1;
         let line = line.map_err(|e| Error::Io(format!("line {line_no}: {e}")))?;
@@ -60,12 +78,35 @@ pub fn parse_mot<R: BufRead>(reader: R) -> Result<Vec<MotRow>> {
         if text.is_empty() {
             continue;
         }
-        rows.push(parse_row(text).map_err(|reason| Error::Parse {
+        if std::mem::take(&mut first) && is_header(text) {
+            file.header = Some((line_no, text.to_string()));
+            continue;
+        }
+        let row = parse_row(text).map_err(|reason| Error::Parse {
             line: line_no,
             reason,
-        })?);
+        })?;
+        if row.bbox.width == 0.0 || row.bbox.height == 0.0 {
+            return Err(Error::ZeroAreaBox {
+                line: line_no,
+                width: row.bbox.width,
+                height: row.bbox.height,
+            });
+        }
+        file.rows.push(row);
     }
-    Ok(rows)
+    Ok(file)
+}
+
+/// A header names the columns: as many fields as a row, none of them a number.
+fn is_header(text: &str) -> bool {
+    let fields: Vec<&str> = text.split(',').collect();
+    (6..=10).contains(&fields.len()) && fields.iter().all(|f| f.trim().parse::<f64>().is_err())
+}
+
+/// The rows of [`read_mot`], without the header it may have skipped.
+pub fn parse_mot<R: BufRead>(reader: R) -> Result<Vec<MotRow>> {
+    read_mot(reader).map(|file| file.rows)
 }
 
 fn parse_row(text: &str) -> std::result::Result<MotRow, String> {

@@ -33,7 +33,8 @@ pub struct SimulationConfig {
     pub clutter_per_scan: f64,
     /// Target motion (its sampling period is the scan period).
     pub motion: ConstantVelocity2,
-    /// Position-measurement noise covariance R.
+    /// Position-measurement noise covariance R (rows in files, see [`crate::matrix_rows`]).
+    #[serde(with = "crate::matrix_rows")]
     pub measurement_noise: Matrix2<f64>,
     /// A newborn's speed is uniform in [0, initial_speed_max] with a uniform heading.
     pub initial_speed_max: f64,

@@ -745,3 +745,105 @@ fn misspelt_fields_in_model_configs_are_errors() {
     let region = r#"{"lower":[0.0,0.0],"upper":[1.0,1.0],"uper":[2.0,2.0]}"#;
     assert!(serde_json::from_str::<Region2>(region).is_err());
 }
+
+#[test]
+fn mot_header_is_skipped_and_returned() {
+    // The header of a MOTChallenge results file with column names, then rows.
+    let text = "\nframe,id,bb_left,bb_top,bb_width,bb_height,conf,x,y,z\n1,1,0,0,10,10\n";
+    let file = read_mot(text.as_bytes()).unwrap();
+    assert_eq!(
+        file.header,
+        Some((
+            2,
+            "frame,id,bb_left,bb_top,bb_width,bb_height,conf,x,y,z".into()
+        ))
+    );
+    assert_eq!(file.rows.len(), 1);
+    assert_eq!(parse_mot(text.as_bytes()).unwrap(), file.rows);
+    // A header is only the first non-blank line, and only when no field is a number: a bad
+    // row is still an error, and a header-like line after a row is one too.
+    assert!(matches!(
+        parse_mot("1,1,0,0,ten,10\n".as_bytes()),
+        Err(Error::Parse { line: 1, .. })
+    ));
+    assert!(matches!(
+        parse_mot("1,1,0,0,1,1\nframe,id,l,t,w,h\n".as_bytes()),
+        Err(Error::Parse { line: 2, .. })
+    ));
+    assert_eq!(read_mot("1,1,0,0,1,1\n".as_bytes()).unwrap().header, None);
+}
+
+#[test]
+fn zero_area_boxes_are_a_typed_error_at_parse_time() {
+    for (text, width, height) in [
+        ("1,1,5,5,0,10\n", 0.0, 10.0),
+        ("1,1,5,5,10,0\n", 10.0, 0.0),
+        ("1,1,5,5,0,0,1,-1,-1,-1\n", 0.0, 0.0),
+    ] {
+        assert_eq!(
+            parse_mot(format!("1,2,0,0,3,4\n{text}").as_bytes()),
+            Err(Error::ZeroAreaBox {
+                line: 2,
+                width,
+                height
+            })
+        );
+    }
+    // The smallest positive box is fine.
+    assert_eq!(
+        parse_mot("1,1,0,0,1e-9,1e-9\n".as_bytes()).unwrap().len(),
+        1
+    );
+}
+
+#[test]
+fn config_matrices_are_rows_and_the_flat_form_still_loads() {
+    // Rows: an asymmetric matrix shows the order.
+    let noise = CvNoise::Discrete {
+        acceleration_covariance: Matrix2::new(4.0, 1.0, 1.0, 9.0),
+    };
+    let json = serde_json::to_string(&noise).unwrap();
+    assert_eq!(
+        json,
+        r#"{"discrete":{"acceleration_covariance":[[4.0,1.0],[1.0,9.0]]}}"#
+    );
+    assert_eq!(serde_json::from_str::<CvNoise>(&json).unwrap(), noise);
+    // The flat form is whatever nalgebra's own serde writes (column-major): read it back
+    // through the helper and get nalgebra's matrix.
+    let m = Matrix2::new(1.0, 2.0, 3.0, 4.0);
+    let flat = serde_json::to_string(&m).unwrap();
+    assert_eq!(flat, "[1.0,3.0,2.0,4.0]");
+    let cfg: SimulationConfig =
+        serde_json::from_str(&format!(r#"{{"measurement_noise":{flat}}}"#)).unwrap();
+    assert_eq!(cfg.measurement_noise, m);
+    let cfg: SimulationConfig =
+        serde_json::from_str(r#"{"measurement_noise":[[1.0,2.0],[3.0,4.0]]}"#).unwrap();
+    assert_eq!(cfg.measurement_noise, m);
+    // A whole config round-trips through the row form.
+    let cfg = SimulationConfig {
+        measurement_noise: Matrix2::new(25.0, 5.0, 5.0, 16.0),
+        ..SimulationConfig::default()
+    };
+    let json = serde_json::to_string(&cfg).unwrap();
+    assert!(
+        json.contains(r#""measurement_noise":[[25.0,5.0],[5.0,16.0]]"#),
+        "{json}"
+    );
+    assert_eq!(
+        serde_json::from_str::<SimulationConfig>(&json).unwrap(),
+        cfg
+    );
+    // Wrong shapes name the expected one.
+    for bad in [
+        "[[1.0,0.0],[0.0]]",
+        "[1.0,0.0,1.0]",
+        "[[1.0,0.0],2.0]",
+        "[[1,0],[0,1],[0,0]]",
+    ] {
+        let err =
+            serde_json::from_str::<SimulationConfig>(&format!(r#"{{"measurement_noise":{bad}}}"#))
+                .unwrap_err()
+                .to_string();
+        assert!(err.contains("2×2"), "{bad}: {err}");
+    }
+}

@@ -1,5 +1,7 @@
 //! The pipelines a scenario file can name; `PIPELINES` in lib.rs registers them.
 
+pub mod audio;
+pub mod dmtim;
 pub mod gdt;
 pub mod hmm;
 pub mod kalman;
@@ -8,3 +10,4 @@ pub mod mot_eval;
 pub mod mot_track;
 pub mod phd;
 pub mod simulator;
+pub mod video;
