@@ -55,6 +55,7 @@ use serde::de::DeserializeOwned;
 pub mod mot;
 mod pipelines;
 mod report;
+mod stats;
 pub mod track;
 
 pub use report::{Axes, Chart, Figure, Section, Series, Style, Table, YAxis, fmt_num};

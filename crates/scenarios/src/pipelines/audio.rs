@@ -140,13 +140,7 @@ fn sim_config(p: &Params, snr_db: f64) -> SimulationConfig {
     }
 }
 
-/// 95 % normal-approximation interval half-width, 1.96 s/√n.
-fn mean_ci(v: &[f64]) -> (f64, f64) {
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0).max(1.0);
-    (mean, 1.96 * (var / n).sqrt())
-}
+use crate::stats::mean_ci;
 
 /// The six nodes of the road experiment: 12 m apart along y = −6, facing along the road.
 fn road_nodes() -> Vec<SensorPose> {

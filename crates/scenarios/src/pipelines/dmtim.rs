@@ -170,15 +170,15 @@ impl Pipeline for DmtimSevenRadars {
     fn metrics(o: &Output) -> Metrics {
         let mut m = Metrics::new();
         for (v, key) in KEYS.iter().enumerate() {
-            let (c, _) = mean_ci(&per_run(o, v, IdentityRun::pooled_correct_fraction));
+            let (c, _) = mean_ci(per_run(o, v, IdentityRun::pooled_correct_fraction));
             m.insert(format!("{key}.correct_fraction"), c);
-            let (h, _) = mean_ci(&per_run(o, v, |r| {
+            let (h, _) = mean_ci(per_run(o, v, |r| {
                 r.entropy_nats.last().copied().unwrap_or(0.0)
             }));
             m.insert(format!("{key}.final_entropy_nats"), h);
         }
-        let (b, _) = mean_ci(&per_run(o, OURS, |r| r.bytes_exchanged as f64));
-        let (raw, _) = mean_ci(&per_run(o, OURS, |r| r.bytes_raw as f64));
+        let (b, _) = mean_ci(per_run(o, OURS, |r| r.bytes_exchanged as f64));
+        let (raw, _) = mean_ci(per_run(o, OURS, |r| r.bytes_raw as f64));
         m.insert("chernoff.bytes_exchanged".into(), b);
         m.insert("chernoff.bytes_raw".into(), raw);
         let drops = read_drops(o, OURS);
@@ -288,12 +288,12 @@ impl Pipeline for DmtimSevenRadars {
             ],
         );
         for (v, name) in VARIANTS.iter().enumerate() {
-            let c = mean_ci(&per_run(o, v, IdentityRun::pooled_correct_fraction));
-            let h = mean_ci(&per_run(o, v, |r| {
+            let c = mean_ci(per_run(o, v, IdentityRun::pooled_correct_fraction));
+            let h = mean_ci(per_run(o, v, |r| {
                 r.entropy_nats.last().copied().unwrap_or(0.0)
             }));
-            let b = mean_ci(&per_run(o, v, |r| r.bytes_exchanged as f64));
-            let raw = mean_ci(&per_run(o, v, |r| r.bytes_raw as f64));
+            let b = mean_ci(per_run(o, v, |r| r.bytes_exchanged as f64));
+            let raw = mean_ci(per_run(o, v, |r| r.bytes_raw as f64));
             t.row(vec![name.to_string(), pm(c), pm(h), pm(b), pm(raw)]);
         }
         s.tables.push(t);
@@ -329,8 +329,8 @@ impl Pipeline for DmtimSevenRadars {
         let diff = paired(o, OURS, NEAREST);
         let drops = read_drops(o, OURS);
         let dmean = mean_ci(&drops);
-        let b = mean_ci(&per_run(o, OURS, |r| r.bytes_exchanged as f64));
-        let raw = mean_ci(&per_run(o, OURS, |r| r.bytes_raw as f64));
+        let b = mean_ci(per_run(o, OURS, |r| r.bytes_exchanged as f64));
+        let raw = mean_ci(per_run(o, OURS, |r| r.bytes_raw as f64));
         s.summary = format!(
             "Seven radars (range 20, on a hexagon of radius 30 around ATC7) track five aircraft for {} frames with online MCMCDA each; T1 and T2 cross at a shallow angle near the centre, T3 crosses both, T4 and T5 appear at frames 30 and 40. Identity belief matrices are mixed from MCMC samples where tracks come within the interaction distance, handed over at range edges, adopted from neighbours, fused with neighbours' columns (tracks matched by optimal assignment under a χ² gate) and corrected by transponder reads at ATC7 (possibly wrong, at the configured rate). \
              With Chernoff fusion {:.3} ± {:.3} of scored tracks carry the right argmax identity, against {:.3} ± {:.3} for the nearest-track baseline (paired difference {:+.3} ± {:.3}) and {:.3} ± {:.3} for the centralised tracker with identity management. \
@@ -338,14 +338,14 @@ impl Pipeline for DmtimSevenRadars {
              Where we lose: the exchange costs {:.0} ± {:.0} bytes per run against {:.0} ± {:.0} for sending the raw measurements of the same queries; with five aircraft and little clutter a belief column is not smaller than the few measurements it replaces. \
              The truth is used only to announce an aircraft's identity when it first appears (the paper's premise), to de-duplicate the centralised scan and to score; the nearest-track baseline has no parameter beyond the same gate, so nothing was tuned for it; our settings were chosen on development seeds 1–3 of the crate's tests, not on the reported runs (streams 0–{} of the scenario seed), with one exception: a read now updates a column by Bayes' rule (column × read likelihood) instead of replacing it, a change made after a first look at 8 of these runs, where replacing raised H(B) at reads on already-certain columns.",
             o.n_frames,
-            mean_ci(&per_run(o, OURS, IdentityRun::pooled_correct_fraction)).0,
-            mean_ci(&per_run(o, OURS, IdentityRun::pooled_correct_fraction)).1,
-            mean_ci(&per_run(o, NEAREST, IdentityRun::pooled_correct_fraction)).0,
-            mean_ci(&per_run(o, NEAREST, IdentityRun::pooled_correct_fraction)).1,
+            mean_ci(per_run(o, OURS, IdentityRun::pooled_correct_fraction)).0,
+            mean_ci(per_run(o, OURS, IdentityRun::pooled_correct_fraction)).1,
+            mean_ci(per_run(o, NEAREST, IdentityRun::pooled_correct_fraction)).0,
+            mean_ci(per_run(o, NEAREST, IdentityRun::pooled_correct_fraction)).1,
             diff.0,
             diff.1,
-            mean_ci(&per_run(o, CENTRAL, IdentityRun::pooled_correct_fraction)).0,
-            mean_ci(&per_run(o, CENTRAL, IdentityRun::pooled_correct_fraction)).1,
+            mean_ci(per_run(o, CENTRAL, IdentityRun::pooled_correct_fraction)).0,
+            mean_ci(per_run(o, CENTRAL, IdentityRun::pooled_correct_fraction)).1,
             drops.len(),
             dmean.0,
             dmean.1,
@@ -491,19 +491,7 @@ fn mean_series(
         .collect()
 }
 
-/// Mean and 95 % normal-approximation half-width 1.96·s/√n (0 for fewer than 2 values).
-fn mean_ci(v: &[f64]) -> (f64, f64) {
-    if v.is_empty() {
-        return (0.0, 0.0);
-    }
-    let n = v.len() as f64;
-    let mean = v.iter().sum::<f64>() / n;
-    if v.len() < 2 {
-        return (mean, 0.0);
-    }
-    let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, 1.96 * (var / n).sqrt())
-}
+use crate::stats::mean_ci;
 
 fn pm((m, c): (f64, f64)) -> String {
     format!("{} ± {}", fmt_num(m), fmt_num(c))

@@ -233,19 +233,7 @@ pub struct Output {
     longest: (Case, Vec<RecoveredGap>),
 }
 
-/// Mean and half-width of the normal-approximation 95 % CI, 1.96 s/√n.
-fn mean_ci(xs: &[f64]) -> (f64, f64) {
-    let n = xs.len() as f64;
-    if xs.is_empty() {
-        return (f64::NAN, f64::NAN);
-    }
-    let mean = xs.iter().sum::<f64>() / n;
-    if xs.len() < 2 {
-        return (mean, 0.0);
-    }
-    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, 1.96 * (var / n).sqrt())
-}
+use crate::stats::mean_ci;
 
 /// The walkers' true and observed tracks, drawn in order from `rng`.
 fn simulate(p: &Params, rng: &mut impl Rng) -> Result<(TrackSet, TrackSet)> {
@@ -841,7 +829,7 @@ fn length_table(out: &Output) -> Table {
         let mut row = vec![format!("{a}–{}", b - 1), cs.len().to_string()];
         for key in keys {
             let k = method(key);
-            let (m, ci) = mean_ci(&cs.iter().map(|c| c.maes[k].euclidean).collect::<Vec<_>>());
+            let (m, ci) = mean_ci(cs.iter().map(|c| c.maes[k].euclidean).collect::<Vec<_>>());
             row.push(pm(m, ci));
         }
         table.row(row);
@@ -879,7 +867,7 @@ fn length_chart(out: &Output) -> Chart {
                 continue;
             }
             let len = cs.iter().map(|c| c.n_hidden as f64).sum::<f64>() / cs.len() as f64;
-            let (m, ci) = mean_ci(&cs.iter().map(|c| c.maes[k].euclidean).collect::<Vec<_>>());
+            let (m, ci) = mean_ci(cs.iter().map(|c| c.maes[k].euclidean).collect::<Vec<_>>());
             pts.push((len, m));
             band.0.push((len, m - ci));
             band.1.push((len, m + ci));

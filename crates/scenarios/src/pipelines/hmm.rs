@@ -148,15 +148,8 @@ pub struct MeanCi {
 }
 
 fn mean_ci(values: impl IntoIterator<Item = f64>) -> MeanCi {
-    let v: Vec<f64> = values.into_iter().collect();
-    let n = v.len() as f64;
-    let m = v.iter().sum::<f64>() / n;
-    let ci = if v.len() > 1 {
-        1.96 * (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1.0) / n).sqrt()
-    } else {
-        0.0
-    };
-    MeanCi { mean: m, ci }
+    let (mean, ci) = crate::stats::mean_ci(values);
+    MeanCi { mean, ci }
 }
 
 impl MeanCi {

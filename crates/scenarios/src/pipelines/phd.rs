@@ -163,18 +163,7 @@ struct MeanCi {
 }
 
 fn mean_ci(values: impl IntoIterator<Item = f64>) -> MeanCi {
-    let v: Vec<f64> = values.into_iter().collect();
-    let n = v.len() as f64;
-    if v.is_empty() {
-        return MeanCi { mean: 0.0, ci: 0.0 };
-    }
-    let mean = v.iter().sum::<f64>() / n;
-    let ci = if v.len() > 1 {
-        let var = v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-        1.96 * (var / n).sqrt()
-    } else {
-        0.0
-    };
+    let (mean, ci) = crate::stats::mean_ci(values);
     MeanCi { mean, ci }
 }
 

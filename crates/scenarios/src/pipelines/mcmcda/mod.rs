@@ -191,20 +191,7 @@ pub(crate) struct RunScores {
     pub seconds: f64,
 }
 
-/// Mean and 95 % half-width (1.96·s/√n, normal approximation) of `xs`.
-pub(crate) fn mean_ci(xs: impl IntoIterator<Item = f64>) -> (f64, f64) {
-    let xs: Vec<f64> = xs.into_iter().collect();
-    let n = xs.len() as f64;
-    if xs.is_empty() {
-        return (f64::NAN, f64::NAN);
-    }
-    let mean = xs.iter().sum::<f64>() / n;
-    if xs.len() < 2 {
-        return (mean, 0.0);
-    }
-    let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0);
-    (mean, 1.96 * (var / n).sqrt())
-}
+pub(crate) use crate::stats::mean_ci;
 
 /// "mean ± half-width" with `digits` decimals.
 pub(crate) fn pm((mean, ci): (f64, f64), digits: usize) -> String {
