@@ -354,6 +354,10 @@ fn write(
         pages.push(file);
     }
     index += "</ul>\n";
+    if !headlines.is_empty() {
+        index += "<h2>Headline results</h2>\n";
+        index += &headlines;
+    }
     fs::write(
         out_dir.join("index.html"),
         page("Tracking toolkit report", &index),

@@ -33,7 +33,8 @@ use serde::Deserialize;
 use tracker_model::{Region2, Track, TrackId, TrackPoint, TrackSet, Vec2};
 
 use crate::{
-    Chart, Claim, Clock, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num,
+    Chart, Claim, Clock, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table,
+    fmt_num,
 };
 
 /// The `gdt-gaps` pipeline.
@@ -618,6 +619,45 @@ impl Pipeline for GdtGaps {
 
     fn claims(out: &Output) -> Vec<Claim> {
         claims(out)
+    }
+
+    fn headlines(out: &Output) -> Vec<Headline> {
+        let mmae = |key: &str| {
+            let m = &out.methods[method(key)];
+            format!("{} ± {}", fmt_num(m.mmae.euclidean), fmt_num(m.mmae_ci95))
+        };
+        // Oh & Jung (2015), Table 1 on PETS2009 S2L1; ours are the synthetic scenes, so the
+        // columns compare orderings, not values.
+        [
+            (
+                "MMAE (px), GDT with Oh & Jung's goal",
+                "gdt_ml",
+                Some("2.21"),
+            ),
+            (
+                "MMAE (px), GDT goal state (ours)",
+                "gdt_goal_state_ml",
+                None,
+            ),
+            (
+                "MMAE (px), cubic spline (their baseline)",
+                "cubic_spline",
+                Some("2.77"),
+            ),
+            (
+                "MMAE (px), smoothing spline with GCV λ",
+                "smoothing_spline_gcv",
+                None,
+            ),
+        ]
+        .into_iter()
+        .map(|(quantity, key, paper)| Headline {
+            quantity: quantity.to_string(),
+            paper: paper.map(str::to_string),
+            ours: mmae(key),
+            peer: None,
+        })
+        .collect()
     }
 }
 
