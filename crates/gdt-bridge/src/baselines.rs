@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 use tracker_model::ensure_positive;
 
 use crate::error::{Error, Result};
+use crate::search::golden_section;
 
 /// Checks the samples of a method (`what`) that needs at least `min` of them.
 fn check_samples(times: &[f64], values: &[f64], min: usize, what: &'static str) -> Result<()> {
@@ -726,28 +727,13 @@ impl SmoothingSpline {
             return Err(Error::RankDeficientFit);
         };
         // Golden-section search on [x − step, x + step] (the grid point's neighbours).
-        let (mut lo, mut hi) = (
+        let bracket = (
             (x_best - step).max(config.log10_min),
             (x_best + step).min(config.log10_max),
         );
-        let ratio = (5f64.sqrt() - 1.0) / 2.0;
-        let (mut x1, mut x2) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
-        let (mut f1, mut f2) = (at(x1)?, at(x2)?);
-        for _ in 0..config.refine_iterations {
-            if score(&f1) < score(&f2) {
-                hi = x2;
-                x2 = x1;
-                f2 = f1;
-                x1 = hi - ratio * (hi - lo);
-                f1 = at(x1)?;
-            } else {
-                lo = x1;
-                x1 = x2;
-                f1 = f2;
-                x2 = lo + ratio * (hi - lo);
-                f2 = at(x2)?;
-            }
-        }
+        let [f1, f2] = golden_section(bracket, config.refine_iterations, &at, |a, b| {
+            score(a) < score(b)
+        })?;
         for s in [f1, f2] {
             if score(&s) < score(&best) {
                 best = s;

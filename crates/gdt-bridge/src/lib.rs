@@ -60,6 +60,7 @@ mod goal;
 mod link;
 mod noise;
 mod protocol;
+mod search;
 
 #[cfg(test)]
 mod tests;

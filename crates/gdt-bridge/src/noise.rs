@@ -8,6 +8,7 @@ use tracker_model::{Gaussian, ObservationModel, TransitionModel};
 
 use crate::error::{Error, Result};
 use crate::gap::{GdtConfig, GdtModel, Observation, check_frames};
+use crate::search::golden_section;
 
 /// A segment filtered with a [`GdtModel`].
 pub(crate) struct SegmentRun {
@@ -187,12 +188,11 @@ pub fn estimate_noise(segments: &[&[Observation]], search: &NoiseSearch) -> Resu
             }
         }
     }
-    let ratio = (5f64.sqrt() - 1.0) / 2.0;
     for round in 0..search.refine_rounds {
         for k in 0..2 {
             // Search ±(grid step / 2^round) around the best point along parameter k.
             let half = step(k) / f64::from(1u32 << round.min(30));
-            let (mut lo, mut hi) = (
+            let bracket = (
                 (best.0[k] - half).max(bounds[k][0]),
                 (best.0[k] + half).min(bounds[k][1]),
             );
@@ -202,23 +202,7 @@ pub fn estimate_noise(segments: &[&[Observation]], search: &NoiseSearch) -> Resu
                 u[k] = x;
                 Ok((u, eval(u)?))
             };
-            let (mut x1, mut x2) = (hi - ratio * (hi - lo), lo + ratio * (hi - lo));
-            let (mut f1, mut f2) = (at(x1)?, at(x2)?);
-            for _ in 0..15 {
-                if f1.1 > f2.1 {
-                    hi = x2;
-                    x2 = x1;
-                    f2 = f1;
-                    x1 = hi - ratio * (hi - lo);
-                    f1 = at(x1)?;
-                } else {
-                    lo = x1;
-                    x1 = x2;
-                    f1 = f2;
-                    x2 = lo + ratio * (hi - lo);
-                    f2 = at(x2)?;
-                }
-            }
+            let [f1, f2] = golden_section(bracket, 15, at, |a, b| a.1 > b.1)?;
             for (u, ll) in [f1, f2] {
                 if ll > best.1 {
                     best = (u, ll);

@@ -6,7 +6,9 @@ use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use tracker_model::SimulationConfig;
 
-use super::{RunScores, Stat, Trackers, Tuned, Tuning, Variant, paired, pm, run_grid};
+use super::{
+    RunScores, Stat, Trackers, Tuned, Tuning, Variant, paired, pm, run_grid, ties_and_losses,
+};
 use crate::{Chart, Claim, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
 
 /// The `mcmcda-batch` pipeline.
@@ -270,19 +272,7 @@ fn verdict(out: &Output) -> String {
         } else {
             wins.join(", ")
         });
-        if !ties.is_empty() {
-            out.push_str(&format!(
-                "; no significant difference at {}",
-                ties.join(", ")
-            ));
-        }
-        if !losses.is_empty() {
-            out.push_str(&format!(
-                "; the tuned GNN is significantly better at {}",
-                losses.join(", ")
-            ));
-        }
-        out.push_str(". ");
+        out.push_str(&ties_and_losses(&ties, &losses));
         out
     };
     let mut text = String::new();

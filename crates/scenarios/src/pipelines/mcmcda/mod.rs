@@ -454,3 +454,22 @@ fn run_grid(
         .collect::<Result<_>>()?;
     Ok((tuned, results))
 }
+
+/// The end of a verdict sentence: where MCMCDA and the tuned GNN do not differ significantly,
+/// where GNN is significantly better, and the full stop.
+pub(crate) fn ties_and_losses(ties: &[String], losses: &[String]) -> String {
+    let mut s = String::new();
+    if !ties.is_empty() {
+        s.push_str(&format!(
+            "; no significant difference at {}",
+            ties.join(", ")
+        ));
+    }
+    if !losses.is_empty() {
+        s.push_str(&format!(
+            "; the tuned GNN is significantly better at {}",
+            losses.join(", ")
+        ));
+    }
+    s + ". "
+}

@@ -5,7 +5,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use tracker_model::SimulationConfig;
 
-use super::{Stat, Trackers, Tuned, Tuning, Variant, paired, pm, run_grid};
+use super::{Stat, Trackers, Tuned, Tuning, Variant, paired, pm, run_grid, ties_and_losses};
 use crate::{Chart, Claim, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
 
 /// The `mcmcda-sweep` pipeline.
@@ -244,19 +244,7 @@ fn verdict(out: &Output) -> String {
         if ties.is_empty() && losses.is_empty() {
             s = format!("{what}: MCMCDA is significantly better at every point");
         }
-        if !ties.is_empty() {
-            s.push_str(&format!(
-                "; no significant difference at {}",
-                ties.join(", ")
-            ));
-        }
-        if !losses.is_empty() {
-            s.push_str(&format!(
-                "; the tuned GNN is significantly better at {}",
-                losses.join(", ")
-            ));
-        }
-        s.push_str(". ");
+        s.push_str(&ties_and_losses(&ties, &losses));
         s
     };
     format!(
