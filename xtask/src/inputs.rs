@@ -94,38 +94,6 @@ impl Tolerance {
     }
 }
 
-/// Whether a parameter is a standard deviation by its name (`*sigma*`, `*_std`, `std_*`).
-fn is_sigma(key: &str) -> bool {
-    key.contains("sigma") || key.ends_with("_std") || key.starts_with("std_") || key == "std"
-}
-
-/// Every σ-named parameter (and every number in an array or table under one) must be finite
-/// and ≥ 0: pipelines square σ into a variance, so a negative one would act as its absolute
-/// value.
-fn check_sigmas(path: &str, value: &toml::Value, under_sigma: bool) -> Result<()> {
-    match value {
-        toml::Value::Float(v) if under_sigma && !(v.is_finite() && *v >= 0.0) => {
-            bail!("params.{path} = {v}: a standard deviation must be finite and ≥ 0")
-        }
-        toml::Value::Integer(v) if under_sigma && *v < 0 => {
-            bail!("params.{path} = {v}: a standard deviation must be ≥ 0")
-        }
-        toml::Value::Array(items) => {
-            for (i, item) in items.iter().enumerate() {
-                check_sigmas(&format!("{path}[{i}]"), item, under_sigma)?;
-            }
-            Ok(())
-        }
-        toml::Value::Table(table) => {
-            for (key, item) in table {
-                check_sigmas(&format!("{path}.{key}"), item, under_sigma || is_sigma(key))?;
-            }
-            Ok(())
-        }
-        _ => Ok(()),
-    }
-}
-
 /// Parses and checks a scenario file's text: known pipeline, tolerances ≥ 0, σ parameters ≥ 0.
 /// Errors name the problem; the caller adds the file name.
 pub fn parse_scenario(text: &str) -> Result<ScenarioFile> {
@@ -137,9 +105,7 @@ pub fn parse_scenario(text: &str) -> Result<ScenarioFile> {
             scenarios::pipeline_names().join(", ")
         );
     }
-    for (key, value) in &file.params {
-        check_sigmas(key, value, is_sigma(key))?;
-    }
+    scenarios::check_params(&file.params)?;
     Ok(file)
 }
 
@@ -204,15 +170,107 @@ pub fn fuzz_hmm_json(data: &[u8]) {
     serde_json::from_str::<hmm_grid::Hmm>(&json).expect("a serialised model loads again");
 }
 
+/// Fuzz entry: a WAV file (sensors-audio through `hound`). A recording that loads is written
+/// as 32-bit float WAV and reads back to the same samples.
+pub fn fuzz_wav(data: &[u8]) {
+    let Ok(rec) = sensors_audio::Recording::read_wav(std::io::Cursor::new(data), 0.0) else {
+        return;
+    };
+    let mut out = std::io::Cursor::new(Vec::new());
+    rec.write_wav(&mut out).expect("a loaded recording writes");
+    let back = sensors_audio::Recording::read_wav(std::io::Cursor::new(out.into_inner()), 0.0)
+        .expect("a written recording reads back");
+    assert_eq!(back.n_channels(), rec.n_channels(), "channel count changed");
+    assert_eq!(back.n_samples(), rec.n_samples(), "sample count changed");
+}
+
+/// Fuzz entry: one PNG/PGM/PPM image (sensors-video through `image`). A frame that decodes has
+/// the size it claims and writes back as PNG that decodes to the same pixels.
+pub fn fuzz_image(data: &[u8]) {
+    let name = std::path::Path::new("fuzz-input");
+    let Ok(frame) = sensors_video::io::decode_image(data, name) else {
+        return;
+    };
+    let channels = match frame.format() {
+        sensors_video::PixelFormat::Grey => 1,
+        sensors_video::PixelFormat::Rgb => 3,
+    };
+    assert_eq!(
+        frame.data().len(),
+        frame.width() * frame.height() * channels,
+        "pixel buffer does not match the size"
+    );
+}
+
+/// Fuzz entry: a YUV4MPEG2 stream (sensors-video through `y4m`). Every frame of a stream that
+/// reads has the stream's size and format.
+pub fn fuzz_y4m(data: &[u8]) {
+    let Ok(frames) = sensors_video::io::read_y4m(data, "fuzz-input") else {
+        return;
+    };
+    if let Some(first) = frames.first() {
+        assert!(
+            frames.iter().all(|f| (f.width(), f.height(), f.format())
+                == (first.width(), first.height(), first.format())),
+            "frames of one stream differ in size or format"
+        );
+    }
+}
+
+/// Fuzz entry: `cargo xtask eval` end to end. The bytes before the first NUL are the ground
+/// truth, those after it the predictions (without a NUL, both are the same text); every metric
+/// of a pair that loads is finite, and tracks scored against themselves have no FP and no FN.
+pub fn fuzz_eval(data: &[u8]) {
+    use eval_metrics::{EvalConfig, MatchConfig, evaluate};
+    let (gt, pred) = match data.iter().position(|&b| b == 0) {
+        Some(i) => (&data[..i], &data[i + 1..]),
+        None => (data, data),
+    };
+    let (gt, pred) = (String::from_utf8_lossy(gt), String::from_utf8_lossy(pred));
+    let Ok(pair) = scenarios::mot::load_evaluation_pair((&gt, "gt"), (&pred, "pred")) else {
+        return;
+    };
+    let config = EvalConfig {
+        matching: MatchConfig::iou(0.5),
+    };
+    let Ok(report) = evaluate(&pair.gt, &pair.pred, &config) else {
+        return;
+    };
+    let json = serde_json::to_value(&report).expect("a report serialises");
+    assert!(all_numbers_finite(&json), "a metric is not finite: {json}");
+    if pair.gt == pair.pred {
+        // Every prediction is a truth box (IoU 1), so a maximum-similarity matching matches all.
+        let clear = &report.clear;
+        assert_eq!(
+            (clear.false_positives, clear.false_negatives),
+            (0, 0),
+            "a file against itself: {json}"
+        );
+    }
+}
+
+fn all_numbers_finite(v: &serde_json::Value) -> bool {
+    match v {
+        serde_json::Value::Number(n) => n.as_f64().is_none_or(f64::is_finite),
+        serde_json::Value::Array(a) => a.iter().all(all_numbers_finite),
+        serde_json::Value::Object(o) => o.values().all(all_numbers_finite),
+        _ => true,
+    }
+}
+
 /// A fuzz entry function.
 pub type FuzzEntry = fn(&[u8]);
 
 /// The fuzz targets: name (also the corpus directory under `fuzz/corpus/`) and entry.
-pub const FUZZ_TARGETS: [(&str, FuzzEntry); 4] = [
+pub const FUZZ_TARGETS: [(&str, FuzzEntry); 8] = [
     ("mot_reader", fuzz_mot),
     ("scenario_toml", fuzz_scenario_toml),
     ("track_config", fuzz_track_config),
     ("hmm_json", fuzz_hmm_json),
+    ("wav_reader", fuzz_wav),
+    ("image_reader", fuzz_image),
+    ("y4m_reader", fuzz_y4m),
+    ("eval_end_to_end", fuzz_eval),
 ];
 
 /// A short description of a load error with its file, for callers that read files.

@@ -25,31 +25,36 @@ fn image_err(path: &Path, e: &image::ImageError) -> Error {
 /// Reads one PNG/PGM/PPM file as an 8-bit grey or RGB frame; any other pixel format (16-bit,
 /// alpha) is an [`Error::UnsupportedPixelFormat`], never silently converted.
 pub fn read_image(path: &Path) -> Result<VideoFrame> {
-    let img = image::ImageReader::open(path)
-        .map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
-        })?
+    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    decode_image(&bytes, path)
+}
+
+/// Decodes one PNG/PGM/PPM image held in memory (the format is guessed from its first bytes);
+/// `source` labels errors. Decoding keeps the `image` crate's default limits (512 MiB per
+/// allocation), so a header that claims an enormous size is an error, not an allocation.
+pub fn decode_image(bytes: &[u8], source: &Path) -> Result<VideoFrame> {
+    let truncated = || Error::Truncated {
+        source_name: source.display().to_string(),
+        frame: 0,
+    };
+    let img = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
-        .map_err(|source| Error::Io {
-            path: path.to_path_buf(),
-            source,
+        .map_err(|source_err| Error::Io {
+            path: source.to_path_buf(),
+            source: source_err,
         })?
         .decode()
         .map_err(|e| match &e {
             image::ImageError::IoError(io) if io.kind() == std::io::ErrorKind::UnexpectedEof => {
-                Error::Truncated {
-                    source_name: path.display().to_string(),
-                    frame: 0,
-                }
+                truncated()
             }
             image::ImageError::Decoding(d) if d.to_string().contains("unexpected end of file") => {
-                Error::Truncated {
-                    source_name: path.display().to_string(),
-                    frame: 0,
-                }
+                truncated()
             }
-            _ => image_err(path, &e),
+            _ => image_err(source, &e),
         })?;
     let (w, h) = (img.width() as usize, img.height() as usize);
     match img {
@@ -59,7 +64,7 @@ pub fn read_image(path: &Path) -> Result<VideoFrame> {
         image::DynamicImage::ImageRgb8(b) => VideoFrame::new(w, h, PixelFormat::Rgb, b.into_raw()),
         other => Err(Error::UnsupportedPixelFormat {
             format: format!("{:?}", other.color()),
-            source_name: path.display().to_string(),
+            source_name: source.display().to_string(),
         }),
     }
 }
