@@ -70,7 +70,7 @@ fn html_escape(s: &str) -> String {
 
 /// The papers (and the foundations) the scenarios belong to, by pipeline-name prefix: the
 /// report has one page per entry, in this order.
-const PAPERS: [(&str, &str, &str); 9] = [
+const PAPERS: [(&str, &str, &str); 11] = [
     (
         "kalman",
         "foundations",
@@ -87,6 +87,11 @@ const PAPERS: [(&str, &str, &str); 9] = [
         "Oh, Hwang & Sastry 2008: distributed tracking with identity management",
     ),
     (
+        "camnet",
+        "camnet",
+        "Meingast, Oh & Sastry 2007: camera-network localisation from object image tracks",
+    ),
+    (
         "audio",
         "audio",
         "Kushwaha et al. 2008: audio beamforming and bearing likelihoods",
@@ -95,6 +100,11 @@ const PAPERS: [(&str, &str, &str); 9] = [
         "video",
         "video",
         "Kushwaha et al. 2008: video background subtraction and angle profiles",
+    ),
+    (
+        "av-fusion",
+        "av-fusion",
+        "Kushwaha et al. 2008: audio-video fusion on a grid, tracked by MCMCDA",
     ),
     (
         "hmm",

@@ -23,6 +23,36 @@ where
     (mean, 1.96 * (var / n).sqrt())
 }
 
+/// A mean with the half-width of its 95 % confidence interval ([`mean_ci`] as a value).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct MeanCi {
+    /// Mean.
+    pub(crate) mean: f64,
+    /// Half-width of the 95 % CI.
+    pub(crate) ci: f64,
+}
+
+impl MeanCi {
+    /// [`mean_ci`] of `values`.
+    pub(crate) fn of<I>(values: I) -> Self
+    where
+        I: IntoIterator,
+        I::Item: Borrow<f64>,
+    {
+        let (mean, ci) = mean_ci(values);
+        Self { mean, ci }
+    }
+
+    /// "mean ± half-width", shortest round-trip numbers.
+    pub(crate) fn show(&self) -> String {
+        format!(
+            "{} ± {}",
+            crate::fmt_num(self.mean),
+            crate::fmt_num(self.ci)
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::mean_ci;

@@ -22,6 +22,7 @@ use rayon::prelude::*;
 use serde::Deserialize;
 use tracker_model::{Frame, Track, TrackId, Vec2};
 
+use crate::stats::MeanCi;
 use crate::{
     Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table, fmt_num,
 };
@@ -140,24 +141,8 @@ fn mean(curve: &[f64]) -> f64 {
     curve.iter().sum::<f64>() / curve.len() as f64
 }
 
-/// Mean and half-width of the normal-approximation 95 % CI, 1.96 s/√n (0 for one value).
-#[derive(Debug, Clone, Copy)]
-pub struct MeanCi {
-    /// Mean.
-    mean: f64,
-    /// Half-width.
-    ci: f64,
-}
-
 fn mean_ci(values: impl IntoIterator<Item = f64>) -> MeanCi {
-    let (mean, ci) = crate::stats::mean_ci(values);
-    MeanCi { mean, ci }
-}
-
-impl MeanCi {
-    fn show(&self) -> String {
-        format!("{} ± {}", fmt_num(self.mean), fmt_num(self.ci))
-    }
+    MeanCi::of(values)
 }
 
 /// One model's scores on one replicate's test sequences.

@@ -26,6 +26,7 @@ use rayon::prelude::*;
 use serde::Deserialize;
 use tracker_model::{BoundingBox, LocalDetectorFactory, TrackSet};
 
+use crate::stats::MeanCi;
 use crate::{
     Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Progress, Section, Series, Style,
     Table, fmt_num,
@@ -173,16 +174,8 @@ struct GridPoint {
     faf: f64,
 }
 
-/// Mean and half-width of the normal-approximation 95 % CI, 1.96 s / √n.
-#[derive(Debug, Clone, Copy)]
-struct MeanCi {
-    mean: f64,
-    ci: f64,
-}
-
 fn mean_ci(values: impl IntoIterator<Item = f64>) -> MeanCi {
-    let (mean, ci) = crate::stats::mean_ci(values);
-    MeanCi { mean, ci }
+    MeanCi::of(values)
 }
 
 /// The sweep's results.
@@ -850,7 +843,7 @@ fn pct(m: MeanCi) -> String {
 }
 
 fn pm(m: MeanCi) -> String {
-    format!("{} ± {}", fmt_num(m.mean), fmt_num(m.ci))
+    m.show()
 }
 
 fn summary(out: &Output) -> String {

@@ -172,7 +172,7 @@ impl Pipeline for VideoMog {
                         let px = |f: &dyn Fn(usize) -> bool| -> Vec<(f64, f64)> {
                             (0..w * h)
                                 .filter(|&i| f(i))
-                                .map(|i| ((i % w) as f64, -((i / w) as f64)))
+                                .map(|i| ((i % w) as f64, (i / w) as f64))
                                 .collect()
                         };
                         let angle = |b: usize| profiler.bin_angle_rad(b).to_degrees();
@@ -350,14 +350,15 @@ impl Pipeline for VideoMog {
                     "Run 0, plotted frame: truth object pixels, detected foreground and pixels labelled shadow",
                     Chart::new(
                         "Foreground mask against the truth",
-                        "column",
-                        "−row",
+                        "column (px)",
+                        "row (px, growing downward)",
                         vec![
                             Series::new("truth", out.truth_px.clone(), Style::Markers, 7),
                             Series::new("detected", out.detected_px.clone(), Style::Markers, 0),
                             Series::new("shadow label", out.shadow_px.clone(), Style::Markers, 2),
                         ],
-                    ),
+                    )
+                    .in_image_coordinates(),
                 ),
                 Figure::new(
                     "angle-profile",
@@ -365,7 +366,7 @@ impl Pipeline for VideoMog {
                     Chart::new(
                         "Detection function over angle",
                         "bearing relative to the camera axis (°)",
-                        "pixels",
+                        "foreground pixels (count)",
                         bearing_series,
                     ),
                 ),

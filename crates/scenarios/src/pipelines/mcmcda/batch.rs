@@ -515,7 +515,7 @@ fn figures(out: &Output) -> Vec<Figure> {
     let gospa_chart = Chart::new(
         "Mean GOSPA against the number of targets",
         "targets K",
-        "GOSPA (c, p = 2)",
+        "GOSPA (region units; c, p = 2)",
         series(true, |s| s.gospa.0),
     );
     vec![

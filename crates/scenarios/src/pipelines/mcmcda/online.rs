@@ -270,7 +270,7 @@ fn figures(out: &Output) -> Vec<Figure> {
     let ospa_chart = Chart::new(
         "OSPA of the online estimates",
         "scan",
-        "OSPA (c, p = 2)",
+        "OSPA (region units; c, p = 2)",
         vec![Series::new(
             "online MCMCDA",
             out.ospa_series.clone(),
