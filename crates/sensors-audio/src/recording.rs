@@ -88,6 +88,14 @@ impl Recording {
         let n_ch = u16::try_from(self.n_channels()).map_err(|_| {
             AudioError::Unsupported(format!("{} channels exceed WAV's 65535", self.n_channels()))
         })?;
+        // The header stores bytes per second in 32 bits (hound computes it unchecked).
+        if u64::from(self.sample_rate_hz) * u64::from(n_ch) * 4 > u64::from(u32::MAX) {
+            return Err(AudioError::Unsupported(format!(
+                "{} Hz × {n_ch} channels × 4 bytes per second overflow the WAV header's 32-bit \
+                 byte rate",
+                self.sample_rate_hz
+            )));
+        }
         let spec = hound::WavSpec {
             channels: n_ch,
             sample_rate: self.sample_rate_hz,

@@ -718,6 +718,13 @@ fn wav_round_trip_is_lossless_and_integer_pcm_is_scaled() {
         Recording::read_wav(Cursor::new(b"not a wav".to_vec()), 0.0),
         Err(AudioError::Wav(_))
     ));
+    // A sample rate whose byte rate overflows the header's 32 bits (found by the fuzzer: hound
+    // multiplies unchecked) is a typed error, not a panic or a wrapped header.
+    let fast = Recording::new(1_073_741_855, 0.0, vec![vec![0.0; 4]]).unwrap();
+    assert!(matches!(
+        fast.write_wav(Cursor::new(Vec::new())),
+        Err(AudioError::Unsupported(_))
+    ));
 }
 
 #[test]

@@ -164,6 +164,60 @@ fn rgb_to_ycbcr(p: &[u8]) -> [u8; 3] {
     [c(y), c(128.0 + (b - y) / 1.772), c(128.0 + (r - y) / 1.402)]
 }
 
+/// The largest frame side a y4m header may declare (8K video is 7680 wide): the `y4m` crate
+/// multiplies the declared sizes without overflow checks before its own limits apply.
+const MAX_Y4M_SIDE: usize = 32_768;
+
+/// Reads the stream header (up to its newline) and checks every declared width and height
+/// (`W…`, `H…`; the last of each counts) before the `y4m` crate sees them. Returns the header
+/// bytes and the reader positioned after them.
+fn checked_y4m_header<R: Read>(mut reader: R, source_name: &str) -> Result<(Vec<u8>, R)> {
+    const MAX_HEADER: usize = 4096;
+    let mut header = Vec::new();
+    let mut byte = [0_u8; 1];
+    while header.len() < MAX_HEADER {
+        match reader.read(&mut byte) {
+            Ok(0) => break,
+            Ok(_) => {
+                header.push(byte[0]);
+                if byte[0] == b'\n' {
+                    break;
+                }
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e) => {
+                return Err(Error::Y4m {
+                    source_name: source_name.to_string(),
+                    reason: e.to_string(),
+                });
+            }
+        }
+    }
+    for token in header.split(|b| b.is_ascii_whitespace()).skip(1) {
+        let (Some(&tag), Some(value)) = (token.first(), token.get(1..)) else {
+            continue;
+        };
+        if tag != b'W' && tag != b'H' {
+            continue;
+        }
+        let side = std::str::from_utf8(value)
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok());
+        if side.is_none_or(|v| v > MAX_Y4M_SIDE) {
+            return Err(Error::Y4m {
+                source_name: source_name.to_string(),
+                reason: format!(
+                    "the header declares {}{}: frame sides must be whole numbers of at most \
+                     {MAX_Y4M_SIDE} pixels",
+                    char::from(tag),
+                    String::from_utf8_lossy(value)
+                ),
+            });
+        }
+    }
+    Ok((header, reader))
+}
+
 /// Reads a whole YUV4MPEG2 stream. `source_name` labels errors.
 pub fn read_y4m<R: Read>(reader: R, source_name: &str) -> Result<Vec<VideoFrame>> {
     let count = Rc::new(Cell::new(0));
@@ -175,7 +229,8 @@ pub fn read_y4m<R: Read>(reader: R, source_name: &str) -> Result<Vec<VideoFrame>
         source_name: source_name.to_string(),
         reason: e.to_string(),
     };
-    let mut dec = match y4m::decode(counting) {
+    let (header, rest) = checked_y4m_header(counting, source_name)?;
+    let mut dec = match y4m::decode(std::io::Cursor::new(header).chain(rest)) {
         Ok(d) => d,
         Err(y4m::Error::EOF) => {
             return Err(Error::Truncated {

@@ -618,6 +618,18 @@ fn bad_input_gets_typed_errors() {
         io::read_y4m(y10.as_slice(), "mem"),
         Err(Error::UnsupportedPixelFormat { .. })
     ));
+    // Declared sizes the y4m crate would multiply unchecked (found by the fuzzer): a typed
+    // error naming the value, whichever of several W/H tokens is the culprit.
+    for header in [
+        &b"YUV4MPEG2 W100000 H12 W100000000 H10000066 H1000006666444\nFRE\n"[..],
+        b"YUV4MPEG2 W4 H99999999999999999999999 C444\nFRAME\n",
+        b"YUV4MPEG2 W-4 H4 C444\nFRAME\n",
+    ] {
+        match io::read_y4m(header, "mem") {
+            Err(Error::Y4m { reason, .. }) => assert!(reason.contains("at most 32768"), "{reason}"),
+            other => panic!("{other:?}"),
+        }
+    }
     // Bad configurations are caught once, at construction.
     let bad = MogConfig {
         background_ratio: 1.5,
