@@ -62,6 +62,25 @@ pub enum Error {
         /// The box height.
         height: f64,
     },
+    /// A MOTChallenge row whose coordinates are so large that its size is lost to rounding
+    /// (`left + width − left` is not `width` to 1e-6): its IoU, even with itself, would be
+    /// rounding noise.
+    #[error(
+        "line {line}: the box at ({left}, {top}) of size {width} × {height} is beyond f64 \
+         precision: at that distance from the origin its size is lost to rounding"
+    )]
+    BoxBeyondPrecision {
+        /// 1-based line number in the input.
+        line: usize,
+        /// The box's left edge.
+        left: f64,
+        /// The box's top edge.
+        top: f64,
+        /// The box width.
+        width: f64,
+        /// The box height.
+        height: f64,
+    },
     /// Reading from the caller's reader failed.
     #[error("read failed: {0}")]
     Io(String),
