@@ -54,6 +54,15 @@ pub enum Error {
         /// The first frame still open.
         window_start: Frame,
     },
+    /// A measurement or a window reaches a scan that [`crate::Problem::forget_before`]
+    /// dropped.
+    #[error("scan {scan} was forgotten: the problem keeps scans from {first_kept} on")]
+    ScanForgotten {
+        /// The scan index asked for.
+        scan: usize,
+        /// The first scan index kept.
+        first_kept: usize,
+    },
     /// More measurements than a [`MeasId`] can number.
     #[error("more than 2^32 measurements")]
     TooManyMeasurements,

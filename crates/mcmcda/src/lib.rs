@@ -13,6 +13,8 @@
 //! * [`Chain`] / [`run_chains`]: Algorithm 3 with all eight moves and exact proposal
 //!   probabilities, MAP and MMSE, independent chains in parallel;
 //! * [`OnlineTracker`]: Algorithm 4, sliding-window MCMCDA with persistent track labels;
+//!   [`OnlineTracker::drain_committed`] streams the final track pieces out and forgets old
+//!   scans ([`Problem::forget_before`]), so a run of any length holds constant memory;
 //! * [`single_scan_mcmcda`]: Algorithms 1-2, JPDA probabilities β for a known number of
 //!   targets by MCMC, and [`jpda_exact`] by enumeration;
 //! * baselines: [`nearest_neighbour_tracks`] (GNN with the log-likelihood-ratio costs of
@@ -84,7 +86,7 @@ pub use nearest::{
     Assignment, AssignmentCost, NearestNeighbourConfig, greedy_initial_partition,
     nearest_neighbour_tracks,
 };
-pub use online::{OnlineConfig, OnlineResult, OnlineStep, OnlineTracker};
+pub use online::{CommittedPiece, OnlineConfig, OnlineResult, OnlineStep, OnlineTracker};
 pub use partition::Partition;
 pub use problem::{MeasId, Problem};
 pub use sampler::{Chain, McmcdaRun, MoveStats, run_chains};

@@ -5,6 +5,12 @@
 //! scan (as the authors' code does). A scan's associations are final when it leaves the
 //! window; tracks keep their identity across windows through the measurements they share
 //! with the previous MAP. Late measurements join their own scan while it is in the window.
+//!
+//! By default the tracker keeps every measurement and every final association until
+//! [`OnlineTracker::finish`], so its memory grows with the run. A long run streams instead:
+//! [`OnlineTracker::drain_committed`] hands over the final track pieces committed since the
+//! last call and forgets the scans nothing can reach any more, so memory stays bounded by the
+//! window (docs/reliability.md records it over 10⁵ scans).
 
 use std::collections::{BTreeMap, HashMap};
 
@@ -16,7 +22,7 @@ use tracker_model::{Frame, GATE_CHI2_2D, TrackSet, Vec2, ensure_positive};
 use crate::config::Model;
 use crate::error::{Error, Result, invalid_parameter};
 use crate::estimates::smoothed_tracks;
-use crate::partition::{FREE, Partition};
+use crate::partition::Partition;
 use crate::problem::{MeasId, Problem};
 use crate::sampler::Chain;
 
@@ -84,7 +90,24 @@ pub struct OnlineResult {
     pub problem: Problem,
 }
 
-/// The sliding-window tracker. Owns the measurements it has seen.
+/// A piece of a track whose associations became final: the measurements a label gained in
+/// the scans that left the window since the last [`OnlineTracker::drain_committed`], in
+/// scan order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CommittedPiece {
+    /// The track's persistent label (the same label in every piece of one track and in
+    /// [`OnlineTracker::finish`]).
+    pub label: u64,
+    /// Measurement ids (stable: the ids [`OnlineTracker::push_scan`] gave them).
+    pub measurements: Vec<MeasId>,
+    /// Frame of each measurement.
+    pub frames: Vec<Frame>,
+    /// Position of each measurement (as measured, not smoothed).
+    pub positions: Vec<Vec2>,
+}
+
+/// The sliding-window tracker. Owns the measurements it has seen (the scans it still
+/// needs, once [`Self::drain_committed`] is used).
 pub struct OnlineTracker {
     model: Model,
     problem: Problem,
@@ -93,8 +116,11 @@ pub struct OnlineTracker {
     /// The previous window's MAP with labels.
     map: Vec<(u64, Vec<MeasId>)>,
     next_label: u64,
-    /// Final associations of the scans that left the window, by label.
+    /// Final associations of the scans that left the window, by label (those not drained
+    /// yet, once [`Self::drain_committed`] is used).
     committed: BTreeMap<u64, Vec<MeasId>>,
+    /// How many committed measurements each live label has handed over in drained pieces.
+    released: BTreeMap<u64, usize>,
     /// The first scan not committed yet.
     open_from: usize,
 }
@@ -112,11 +138,13 @@ impl OnlineTracker {
             map: Vec::new(),
             next_label: 0,
             committed: BTreeMap::new(),
+            released: BTreeMap::new(),
             open_from: 0,
         })
     }
 
-    /// The measurements received so far.
+    /// The measurements received so far (from [`Problem::first_kept_scan`] on, once
+    /// [`Self::drain_committed`] has forgotten older scans).
     pub fn problem(&self) -> &Problem {
         &self.problem
     }
@@ -225,6 +253,9 @@ impl OnlineTracker {
         let window = self.problem.all_scans()?;
         let (lo, hi) = (self.window_start(), *window.end());
         for (k, &m) in pre.iter().chain(post).enumerate() {
+            if self.problem.is_forgotten(m) {
+                return Err(Error::MeasurementOutsideWindow { track: k, id: m });
+            }
             if !self.problem.contains(m) {
                 return Err(Error::UnknownMeasurement { track: k, id: m });
             }
@@ -285,8 +316,93 @@ impl OnlineTracker {
         }
     }
 
+    /// Streams the output: returns the final track pieces committed since the last call
+    /// (by label, each piece's measurements in scan order) and drops them, together with the
+    /// scans nothing can reach any more (older than the window's start minus d̄, so every
+    /// neighbourhood a window can use stays whole). Called after every
+    /// [`Self::push_scan`] (or every few), it keeps the tracker's memory bounded by the
+    /// window however long the run; [`Self::finish`] then returns only what was not drained.
+    ///
+    /// As in [`Self::finish`], a label must end up with at least two committed measurements
+    /// to be a track: a label's first committed measurement is held back until a second one
+    /// is committed, and dropped if its track leaves the MAP before that. The pieces of
+    /// each label, concatenated in drain order and followed by its association in
+    /// [`Self::finish`], are exactly the association a run without draining returns.
+    /// After a drain, [`Self::problem`] holds only the scans kept and [`OnlineResult`]'s
+    /// `problem` too.
+    ///
+    /// ```
+    /// use mcmcda::{McmcdaConfig, OnlineConfig, OnlineTracker};
+    /// use tracker_model::Vec2;
+    ///
+    /// let model = McmcdaConfig::default().check()?;
+    /// let config = OnlineConfig { window: 5, samples_per_scan: 200, ..OnlineConfig::default() };
+    /// let mut tracker = OnlineTracker::new(model, 0, config, 7)?;
+    /// let mut pieces = Vec::new();
+    /// for frame in 0..40 {
+    ///     let t = f64::from(frame);
+    ///     tracker.push_scan(frame, &[Vec2::new(100.0 + 20.0 * t, 500.0)])?;
+    ///     pieces.extend(tracker.drain_committed());
+    /// }
+    /// // Only the window (5 scans) and the d̄ = 5 scans before it are kept.
+    /// assert_eq!(tracker.problem().kept_scans()?, 30..=39);
+    /// assert_eq!(tracker.problem().n_kept_measurements(), 10);
+    /// let rest = tracker.finish()?;
+    /// let streamed: usize = pieces.iter().map(|p| p.measurements.len()).sum();
+    /// let held: usize = rest.associations.iter().map(|(_, m)| m.len()).sum();
+    /// assert_eq!(streamed + held, 40);
+    /// # Ok::<(), mcmcda::Error>(())
+    /// ```
+    pub fn drain_committed(&mut self) -> Vec<CommittedPiece> {
+        let alive: Vec<u64> = self.map.iter().map(|(l, _)| *l).collect();
+        let mut pieces = Vec::new();
+        let committed = std::mem::take(&mut self.committed);
+        for (label, meas) in committed {
+            let before = self.released.get(&label).copied().unwrap_or(0);
+            if before + meas.len() < 2 {
+                if alive.contains(&label) && !meas.is_empty() {
+                    self.committed.insert(label, meas);
+                }
+                continue;
+            }
+            self.released.insert(label, before + meas.len());
+            if meas.is_empty() {
+                continue;
+            }
+            let problem = &self.problem;
+            pieces.push(CommittedPiece {
+                label,
+                frames: meas
+                    .iter()
+                    .map(|&m| problem.first_frame() + problem.scan_of(m) as Frame)
+                    .collect(),
+                positions: meas.iter().map(|&m| problem.position(m)).collect(),
+                measurements: meas,
+            });
+        }
+        self.released.retain(|l, _| alive.contains(l));
+        // Scans before the window and d̄ more are out of every neighbourhood the next
+        // windows use; held-back measurements keep their scans.
+        let held_back = self
+            .committed
+            .values()
+            .flatten()
+            .map(|&m| self.problem.scan_of(m))
+            .min()
+            .unwrap_or(usize::MAX);
+        let keep_from = self
+            .open_from
+            .saturating_sub(self.problem.max_gap())
+            .min(held_back);
+        self.problem.forget_before(keep_from);
+        pieces
+    }
+
     /// Commits the current window and returns every track (label as id) smoothed over its
-    /// committed measurements, with the associations.
+    /// committed measurements, with the associations. After [`Self::drain_committed`], only
+    /// what was not drained: the smoothing then runs over each label's remaining
+    /// measurements only, and a label that already handed over pieces keeps even a single
+    /// remaining measurement in `associations` (its smoothed track then has one point).
     pub fn finish(mut self) -> Result<OnlineResult> {
         if let Ok(all) = self.problem.all_scans()
             && self.open_from <= *all.end()
@@ -296,7 +412,8 @@ impl OnlineTracker {
         let mut tracks = TrackSet::new();
         let mut associations = Vec::new();
         for (label, meas) in self.committed {
-            if meas.len() < 2 {
+            let released = self.released.get(&label).copied().unwrap_or(0);
+            if meas.is_empty() || released + meas.len() < 2 {
                 continue;
             }
             let one = smoothed_tracks(
@@ -330,7 +447,7 @@ fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64) {
             continue;
         }
         for &m in problem.forward(last, gap) {
-            if partition.owner[m as usize] != FREE {
+            if !partition.is_free(m) {
                 continue;
             }
             let node = &t.nodes[t.nodes.len() - 1];

@@ -30,10 +30,14 @@ pub struct Partition<'a> {
     pub(crate) lo: usize,
     pub(crate) hi: usize,
     pub(crate) tracks: Vec<TrackState>,
-    /// Track index holding each measurement of the problem, or FREE / OUTSIDE.
-    pub(crate) owner: Vec<u32>,
-    /// Position of each held measurement inside its track.
-    pub(crate) slot: Vec<u32>,
+    /// The smallest id of a measurement in the window: `owner` and `slot` start there.
+    id_base: MeasId,
+    /// Track index holding each measurement from `id_base` to the window's last id, or
+    /// FREE / OUTSIDE (ids outside that span are OUTSIDE too), so that the maps grow with
+    /// the window and not with the problem.
+    owner: Vec<u32>,
+    /// Position of each held measurement inside its track, indexed like `owner`.
+    slot: Vec<u32>,
     /// Σ_t n_t log λ_f over the window: the log posterior of "everything is clutter".
     baseline: f64,
 }
@@ -47,11 +51,12 @@ impl<'a> Partition<'a> {
         window: RangeInclusive<usize>,
     ) -> Result<Self> {
         let (lo, hi) = check_window(problem, &window)?;
-        let mut owner = vec![OUTSIDE; problem.n_measurements()];
+        let span = problem.id_span(lo..=hi).unwrap_or(0..0);
+        let mut owner = vec![OUTSIDE; span.len()];
         let mut n_in = 0usize;
         for (_, scan) in problem.nonempty_scans(lo..=hi) {
             for &m in scan {
-                owner[m as usize] = FREE;
+                owner[(m - span.start) as usize] = FREE;
                 n_in += 1;
             }
         }
@@ -61,7 +66,8 @@ impl<'a> Partition<'a> {
             lo,
             hi,
             tracks: Vec::new(),
-            slot: vec![0; problem.n_measurements()],
+            id_base: span.start,
+            slot: vec![0; span.len()],
             owner,
             baseline: n_in as f64 * model.log_clutter_density,
         })
@@ -95,11 +101,13 @@ impl<'a> Partition<'a> {
             });
         }
         for &id in track {
-            match self.owner.get(id as usize) {
-                None => return Err(Error::UnknownMeasurement { track: k, id }),
-                Some(&OUTSIDE) => return Err(Error::MeasurementOutsideWindow { track: k, id }),
-                Some(&FREE) => {}
-                Some(_) => return Err(Error::MeasurementTaken { track: k, id }),
+            if !self.problem.contains(id) && !self.problem.is_forgotten(id) {
+                return Err(Error::UnknownMeasurement { track: k, id });
+            }
+            match self.owner_of(id) {
+                OUTSIDE => return Err(Error::MeasurementOutsideWindow { track: k, id }),
+                FREE => {}
+                _ => return Err(Error::MeasurementTaken { track: k, id }),
             }
         }
         for pair in track.windows(2) {
@@ -165,9 +173,40 @@ impl<'a> Partition<'a> {
 
     /// The track holding measurement `m`, if any.
     pub fn track_of(&self, m: MeasId) -> Option<usize> {
-        match self.owner.get(m as usize) {
-            Some(&k) if k != FREE && k != OUTSIDE => Some(k as usize),
-            _ => None,
+        match self.owner_of(m) {
+            FREE | OUTSIDE => None,
+            k => Some(k as usize),
+        }
+    }
+
+    /// Where `m` sits in `owner` and `slot`, if in their span.
+    #[inline]
+    fn index(&self, m: MeasId) -> Option<usize> {
+        m.checked_sub(self.id_base)
+            .map(|i| i as usize)
+            .filter(|&i| i < self.owner.len())
+    }
+
+    /// The track index holding `m`, or FREE (a false alarm in the window) or OUTSIDE.
+    #[inline]
+    pub(crate) fn owner_of(&self, m: MeasId) -> u32 {
+        self.index(m).map_or(OUTSIDE, |i| self.owner[i])
+    }
+
+    /// Position of `m` inside the track holding it (meaningful when [`Self::owner_of`] is a
+    /// track).
+    #[inline]
+    pub(crate) fn slot_of(&self, m: MeasId) -> u32 {
+        self.index(m).map_or(0, |i| self.slot[i])
+    }
+
+    /// Sets the owner (and slot) of `m`, a measurement of the window.
+    #[inline]
+    fn set_owner(&mut self, m: MeasId, k: u32, slot: Option<u32>) {
+        let i = (m - self.id_base) as usize;
+        self.owner[i] = k;
+        if let Some(s) = slot {
+            self.slot[i] = s;
         }
     }
 
@@ -179,7 +218,7 @@ impl<'a> Partition<'a> {
     /// Whether `m` is a false alarm in the window.
     #[inline]
     pub(crate) fn is_free(&self, m: MeasId) -> bool {
-        self.owner[m as usize] == FREE
+        self.owner_of(m) == FREE
     }
 
     /// Adds a track (assumed feasible), filtering it from the first `keep` nodes of `prefix`.
@@ -208,8 +247,7 @@ impl<'a> Partition<'a> {
     pub(crate) fn reinsert(&mut self, track: TrackState) {
         let k = self.tracks.len() as u32;
         for (i, &m) in track.meas.iter().enumerate() {
-            self.owner[m as usize] = k;
-            self.slot[m as usize] = i as u32;
+            self.set_owner(m, k, Some(i as u32));
         }
         self.tracks.push(track);
     }
@@ -218,11 +256,12 @@ impl<'a> Partition<'a> {
     pub(crate) fn remove(&mut self, k: usize) -> TrackState {
         let removed = self.tracks.swap_remove(k);
         for &m in &removed.meas {
-            self.owner[m as usize] = FREE;
+            self.set_owner(m, FREE, None);
         }
         if let Some(moved) = self.tracks.get(k) {
             for &m in &moved.meas {
-                self.owner[m as usize] = k as u32;
+                // Disjoint fields: `tracks` read, `owner` written.
+                self.owner[(m - self.id_base) as usize] = k as u32;
             }
         }
         removed
@@ -266,14 +305,17 @@ impl<'a> Partition<'a> {
                 });
             }
             for (i, &m) in t.meas.iter().enumerate() {
-                if self.owner[m as usize] != k as u32 || self.slot[m as usize] != i as u32 {
+                if self.owner_of(m) != k as u32 || self.slot_of(m) != i as u32 {
                     return Err(Error::OwnerMapWrong { id: m });
                 }
             }
         }
-        if let Some(stale) = (0..self.owner.len()).find(|&m| fresh.owner[m] != self.owner[m]) {
+        if fresh.id_base != self.id_base || fresh.owner.len() != self.owner.len() {
+            return Err(Error::OwnerMapWrong { id: self.id_base });
+        }
+        if let Some(stale) = (0..self.owner.len()).find(|&i| fresh.owner[i] != self.owner[i]) {
             return Err(Error::OwnerMapWrong {
-                id: stale as MeasId,
+                id: self.id_base + stale as MeasId,
             });
         }
         Ok(())
@@ -292,6 +334,12 @@ pub(crate) fn check_window(
             start: lo,
             end: hi,
             n_scans: problem.n_scans(),
+        });
+    }
+    if lo < problem.first_kept_scan() {
+        return Err(Error::ScanForgotten {
+            scan: lo,
+            first_kept: problem.first_kept_scan(),
         });
     }
     Ok((lo, hi))

@@ -22,11 +22,26 @@ pub type MeasId = u32;
 /// 2009 eq. 9 has a term for every scan a track spans, detected or not).
 /// Measurements can be added to any scan already present (late measurements), and their
 /// neighbourhood entries are added on both sides, so nothing is recomputed.
+///
+/// A long-running (online) problem can drop its oldest scans with [`Problem::forget_before`],
+/// so that storage is proportional to the scans kept, not to the run's length. Measurement
+/// ids and scan indices stay what they were: ids keep counting from 0 in arrival order and
+/// scan index s is still frame `first_frame + s`. A forgotten measurement is no longer
+/// [`contains`](Problem::contains)ed; asking its position, scan or neighbours panics with a
+/// message that says so (as indexing a slice out of range does), never answers with another
+/// measurement's data.
 #[derive(Debug, Clone)]
 pub struct Problem {
     first_frame: Frame,
     max_gap: usize,
     radius_per_scan: f64,
+    /// Id of `positions[0]`: the ids below it are forgotten.
+    id_base: MeasId,
+    /// The first scan kept: scans before it are forgotten, and so are the measurements of
+    /// those scans whose ids lie at or above `id_base` (late arrivals), which keep a slot
+    /// with empty neighbourhoods until the ids before them are dropped.
+    scan_base: usize,
+    /// Indexed by id − `id_base`, like `scan_of`, `forward` and `backward`.
     positions: Vec<Vec2>,
     scan_of: Vec<u32>,
     /// Number of scans, empty ones included (frame − first_frame of the last scan, plus 1).
@@ -48,6 +63,8 @@ impl Problem {
             first_frame,
             max_gap: model.max_gap() as usize,
             radius_per_scan: model.radius_per_scan,
+            id_base: 0,
+            scan_base: 0,
             positions: Vec::new(),
             scan_of: Vec::new(),
             n_scans: 0,
@@ -95,7 +112,8 @@ impl Problem {
     }
 
     /// Adds one measurement to the existing scan at `frame` (a late measurement joins its own
-    /// scan) and links it into the neighbourhoods.
+    /// scan) and links it into the neighbourhoods. A frame whose scan was forgotten
+    /// ([`Self::forget_before`]) is refused with [`Error::ScanForgotten`].
     pub fn add_measurement(&mut self, frame: Frame, position: Vec2) -> Result<MeasId> {
         if !(position.x.is_finite() && position.y.is_finite()) {
             return Err(Error::Model(tracker_model::Error::NonFinite {
@@ -111,7 +129,14 @@ impl Problem {
                 first: self.first_frame,
                 end: u64::from(self.first_frame) + self.n_scans as u64,
             })?;
-        let id = MeasId::try_from(self.positions.len()).map_err(|_| Error::TooManyMeasurements)?;
+        if scan < self.scan_base {
+            return Err(Error::ScanForgotten {
+                scan,
+                first_kept: self.scan_base,
+            });
+        }
+        let id = MeasId::try_from(self.n_measurements()).map_err(|_| Error::TooManyMeasurements)?;
+        let slot = self.positions.len();
         self.positions.push(position);
         self.scan_of.push(scan as u32);
         let d_bar = self.max_gap;
@@ -125,8 +150,9 @@ impl Problem {
                 .filter(|&other| self.within(id, other, d))
                 .collect();
             for other in later {
-                self.forward[id as usize * d_bar + d - 1].push(other);
-                self.backward[other as usize * d_bar + d - 1].push(id);
+                self.forward[slot * d_bar + d - 1].push(other);
+                let other = self.slot(other);
+                self.backward[other * d_bar + d - 1].push(id);
             }
             let earlier: Vec<MeasId> = scan
                 .checked_sub(d)
@@ -136,8 +162,9 @@ impl Problem {
                 .filter(|&other| self.within(id, other, d))
                 .collect();
             for other in earlier {
-                self.backward[id as usize * d_bar + d - 1].push(other);
-                self.forward[other as usize * d_bar + d - 1].push(id);
+                self.backward[slot * d_bar + d - 1].push(other);
+                let other = self.slot(other);
+                self.forward[other * d_bar + d - 1].push(id);
             }
         }
         let at = self.held.partition_point(|&s| (s as usize) < scan);
@@ -150,10 +177,149 @@ impl Problem {
         Ok(id)
     }
 
+    /// Forgets every scan before scan index `scan` (clamped to [`Self::n_scans`]) and its
+    /// measurements: their positions and neighbourhoods are dropped, the neighbourhoods of
+    /// the measurements kept lose the entries that pointed at them, and storage shrinks to
+    /// what the kept scans need. Ids, scan indices and frames keep their meaning; forgotten
+    /// scans read as empty ([`Self::scan`], [`Self::nonempty_scans`]), forgotten ids are not
+    /// [`Self::contains`]ed, windows must start at or after [`Self::first_kept_scan`]
+    /// ([`crate::Partition`] fails with [`Error::ScanForgotten`] otherwise) and
+    /// measurements can no longer be added to forgotten scans. Forgetting is for good:
+    /// asking for an earlier scan than already forgotten does nothing.
+    ///
+    /// ```
+    /// use mcmcda::{McmcdaConfig, Problem};
+    /// use tracker_model::Vec2;
+    ///
+    /// let model = McmcdaConfig::default().check()?;
+    /// let mut problem = Problem::empty(&model, 100);
+    /// for frame in 100..110 {
+    ///     problem.push_scan(frame, &[Vec2::new(f64::from(frame), 0.0)])?;
+    /// }
+    /// problem.forget_before(8);
+    /// assert_eq!(problem.first_kept_scan(), 8);
+    /// assert_eq!(problem.kept_scans()?, 8..=9);
+    /// assert!(!problem.contains(7) && problem.contains(8));
+    /// // Ids and scan indices are unchanged: measurement 9 is still in scan 9, frame 109.
+    /// assert_eq!(problem.scan_of(9), 9);
+    /// assert_eq!(problem.n_measurements(), 10);
+    /// assert_eq!(problem.n_kept_measurements(), 2);
+    /// # Ok::<(), mcmcda::Error>(())
+    /// ```
+    pub fn forget_before(&mut self, scan: usize) {
+        let scan = scan.min(self.n_scans);
+        if scan <= self.scan_base {
+            return;
+        }
+        self.scan_base = scan;
+        let cut = self.held.partition_point(|&s| (s as usize) < scan);
+        let dropped: Vec<Vec<MeasId>> = self.members.drain(..cut).collect();
+        self.held.drain(..cut);
+        let new_base = self
+            .members
+            .iter()
+            .flatten()
+            .copied()
+            .min()
+            .map_or(self.n_measurements() as MeasId, |m| m);
+        let d_bar = self.max_gap;
+        // Late arrivals among the forgotten (ids above new_base): keep the slot, drop the rest.
+        for &m in dropped.iter().flatten().filter(|&&m| m >= new_base) {
+            let i = (m - self.id_base) as usize;
+            for d in 0..d_bar {
+                self.forward[i * d_bar + d] = Vec::new();
+                self.backward[i * d_bar + d] = Vec::new();
+            }
+        }
+        let n_drop = (new_base - self.id_base) as usize;
+        self.positions.drain(..n_drop);
+        self.scan_of.drain(..n_drop);
+        self.forward.drain(..n_drop * d_bar);
+        self.backward.drain(..n_drop * d_bar);
+        self.id_base = new_base;
+        // Backward neighbourhoods reaching into the forgotten scans.
+        let reach = self.members.len().min(
+            self.held
+                .partition_point(|&s| (s as usize) < scan.saturating_add(d_bar)),
+        );
+        for &m in self.members[..reach].iter().flatten() {
+            let i = (m - self.id_base) as usize;
+            let t = self.scan_of[i] as usize;
+            for d in 1..=d_bar {
+                if t < scan + d {
+                    self.backward[i * d_bar + d - 1] = Vec::new();
+                }
+            }
+        }
+        shrink(&mut self.positions);
+        shrink(&mut self.scan_of);
+        shrink(&mut self.forward);
+        shrink(&mut self.backward);
+        shrink(&mut self.held);
+        shrink(&mut self.members);
+    }
+
+    /// The first scan index not forgotten (0 unless [`Self::forget_before`] was called).
+    pub fn first_kept_scan(&self) -> usize {
+        self.scan_base
+    }
+
+    /// The scans kept, `first_kept_scan()..=n_scans() − 1`: the widest window a run can use
+    /// after [`Self::forget_before`] (the same as [`Self::all_scans`] before). Fails with
+    /// [`Error::EmptyProblem`] when no scan is kept.
+    pub fn kept_scans(&self) -> Result<RangeInclusive<usize>> {
+        match self.n_scans {
+            n if n > self.scan_base => Ok(self.scan_base..=n - 1),
+            _ => Err(Error::EmptyProblem),
+        }
+    }
+
+    /// Number of measurements kept (not forgotten).
+    pub fn n_kept_measurements(&self) -> usize {
+        self.members.iter().map(Vec::len).sum()
+    }
+
+    /// Whether `m` was a measurement of this problem and has been forgotten.
+    pub fn is_forgotten(&self, m: MeasId) -> bool {
+        (m as usize) < self.n_measurements() && !self.contains(m)
+    }
+
+    /// Where `m` is stored; panics (with the reason) for an id not held.
+    #[inline]
+    #[track_caller]
+    fn slot(&self, m: MeasId) -> usize {
+        match m.checked_sub(self.id_base).map(|i| i as usize) {
+            Some(i)
+                if self
+                    .scan_of
+                    .get(i)
+                    .is_some_and(|&s| s as usize >= self.scan_base) =>
+            {
+                i
+            }
+            _ => self.not_held(m),
+        }
+    }
+
+    #[cold]
+    #[track_caller]
+    fn not_held(&self, m: MeasId) -> ! {
+        if self.is_forgotten(m) {
+            panic!(
+                "measurement {m} was forgotten (scans before {} are dropped)",
+                self.scan_base
+            )
+        }
+        panic!(
+            "measurement {m} does not exist (the problem has {})",
+            self.n_measurements()
+        )
+    }
+
     /// Whether `a` and `b` can be consecutive measurements of one track `d` scans apart.
     pub fn within(&self, a: MeasId, b: MeasId, d: usize) -> bool {
         let r = d as f64 * self.radius_per_scan;
-        (self.positions[a as usize] - self.positions[b as usize]).norm_squared() <= r * r
+        (self.position(a) - self.position(b)).norm_squared() <= r * r
     }
 
     /// Frame of scan index 0.
@@ -187,9 +353,10 @@ impl Problem {
         }
     }
 
-    /// Number of measurements.
+    /// Number of measurements given ids so far, forgotten ones included: the ids are
+    /// `0..n_measurements()`, and the next measurement added gets id `n_measurements()`.
     pub fn n_measurements(&self) -> usize {
-        self.positions.len()
+        self.id_base as usize + self.positions.len()
     }
 
     /// d̄.
@@ -197,7 +364,8 @@ impl Problem {
         self.max_gap
     }
 
-    /// The measurements of scan index `s` (empty for an empty scan or one past the end).
+    /// The measurements of scan index `s` (empty for an empty scan, a forgotten one or one
+    /// past the end).
     pub fn scan(&self, s: usize) -> &[MeasId] {
         match u32::try_from(s).map(|s| self.held.binary_search(&s)) {
             Ok(Ok(i)) => &self.members[i],
@@ -220,28 +388,67 @@ impl Problem {
             .take_while(move |(s, _)| *s <= hi)
     }
 
-    /// Whether `m` is a measurement of this problem.
+    /// Whether `m` is a measurement of this problem (and not forgotten).
     pub fn contains(&self, m: MeasId) -> bool {
-        (m as usize) < self.positions.len()
+        m.checked_sub(self.id_base)
+            .and_then(|i| self.scan_of.get(i as usize))
+            .is_some_and(|&s| s as usize >= self.scan_base)
     }
 
     /// Position of a measurement.
+    ///
+    /// # Panics
+    /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
+    #[track_caller]
     pub fn position(&self, m: MeasId) -> Vec2 {
-        self.positions[m as usize]
+        self.positions[self.slot(m)]
     }
 
     /// Scan index of a measurement.
+    ///
+    /// # Panics
+    /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
+    #[track_caller]
     pub fn scan_of(&self, m: MeasId) -> usize {
-        self.scan_of[m as usize] as usize
+        self.scan_of[self.slot(m)] as usize
     }
 
     /// L(y_m, t_m, d), d ∈ 1..=d̄.
+    ///
+    /// # Panics
+    /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
+    #[track_caller]
     pub fn forward(&self, m: MeasId, d: usize) -> &[MeasId] {
-        &self.forward[m as usize * self.max_gap + d - 1]
+        &self.forward[self.slot(m) * self.max_gap + d - 1]
     }
 
-    /// The measurements y' of scan t_m − d with y_m ∈ L(y', t_m − d, d).
+    /// The measurements y' of scan t_m − d with y_m ∈ L(y', t_m − d, d) (none once scan
+    /// t_m − d is forgotten).
+    ///
+    /// # Panics
+    /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
+    #[track_caller]
     pub fn backward(&self, m: MeasId, d: usize) -> &[MeasId] {
-        &self.backward[m as usize * self.max_gap + d - 1]
+        &self.backward[self.slot(m) * self.max_gap + d - 1]
+    }
+
+    /// The range of ids of the measurements of the scans `window` (forgotten and other
+    /// scans' ids may lie inside it: late measurements take later ids), or `None` when
+    /// those scans hold no measurement. [`crate::Partition`] sizes its maps by it.
+    pub(crate) fn id_span(&self, window: RangeInclusive<usize>) -> Option<std::ops::Range<MeasId>> {
+        let mut ids = self
+            .nonempty_scans(window)
+            .flat_map(|(_, m)| m.iter().copied());
+        let first = ids.next()?;
+        let (lo, hi) = ids.fold((first, first), |(lo, hi), m| (lo.min(m), hi.max(m)));
+        Some(lo..hi + 1)
+    }
+}
+
+/// Gives memory back after forgetting: capacity stays within a quarter of the length, so
+/// a problem that streams holds what its kept scans need, not the most it ever held.
+fn shrink<T>(v: &mut Vec<T>) {
+    if v.capacity() > v.len() + v.len() / 4 + 8 {
+        v.shrink_to_fit();
     }
 }

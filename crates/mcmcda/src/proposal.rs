@@ -217,8 +217,8 @@ impl Partition<'_> {
         };
         for d in 1..=self.problem.max_gap() {
             for &m in self.successors(last, d) {
-                let k2 = self.owner[m as usize];
-                if k2 != FREE && k2 != OUTSIDE && k2 as usize != k1 && self.slot[m as usize] == 0 {
+                let k2 = self.owner_of(m);
+                if k2 != FREE && k2 != OUTSIDE && k2 as usize != k1 && self.slot_of(m) == 0 {
                     f(k2 as usize);
                 }
             }
@@ -246,12 +246,12 @@ impl Partition<'_> {
         let d_bar = self.problem.max_gap();
         for d in 1..=d_bar.min(t_s1) {
             for &y in self.problem.backward(s1, d) {
-                let k2 = self.owner[y as usize];
+                let k2 = self.owner_of(y);
                 if k2 == FREE || k2 == OUTSIDE || k2 as usize == k1 {
                     continue;
                 }
                 let other = &self.tracks[k2 as usize].meas;
-                let q = self.slot[y as usize] as usize;
+                let q = self.slot_of(y) as usize;
                 let Some(&s2) = other.get(q + 1) else {
                     continue;
                 };

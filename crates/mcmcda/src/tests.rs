@@ -1233,3 +1233,237 @@ fn sample_joins_follow_separated_walkers() {
 fn p_scan_zero(tracker: &crate::OnlineTracker) -> crate::MeasId {
     tracker.problem().scan(0)[0]
 }
+
+/// A problem with a late measurement, built twice: once whole, once forgetting its first
+/// scans. The kept part must answer every question as the whole problem does (same ids,
+/// scans, positions, forward neighbourhoods, backward ones within reach); the forgotten part
+/// must say so (`contains` false, typed errors, a panic that names the reason).
+#[test]
+fn a_problem_forgets_old_scans_and_keeps_ids_and_scan_indices() {
+    let model = McmcdaConfig {
+        max_gap: 2,
+        ..McmcdaConfig::default()
+    }
+    .check()
+    .unwrap();
+    let mut whole = Problem::empty(&model, 100);
+    for f in 100..110u32 {
+        let x = f64::from(f);
+        whole
+            .push_scan(f, &[Vector2::new(x, 0.0), Vector2::new(x, 50.0)])
+            .unwrap();
+        if f == 104 {
+            // Late for frame 102 (scan 2): id 10, stored after scan 4's ids.
+            assert_eq!(
+                whole.add_measurement(102, Vector2::new(102.0, 25.0)),
+                Ok(10)
+            );
+        }
+    }
+    let mut part = whole.clone();
+    part.forget_before(3);
+    assert_eq!(part.first_kept_scan(), 3);
+    assert_eq!(part.kept_scans().unwrap(), 3..=9);
+    assert_eq!(
+        part.all_scans().unwrap(),
+        0..=9,
+        "scan indices keep their meaning"
+    );
+    assert_eq!((part.n_scans(), part.first_frame()), (10, 100));
+    assert_eq!(part.n_measurements(), 21, "ids keep counting");
+    assert_eq!(part.n_kept_measurements(), 14);
+    // Scan s ≥ 3 holds ids 2s and 2s + 1, plus 11 onwards shifted by the late one.
+    let kept: Vec<u32> = (0..21).filter(|&m| part.contains(m)).collect();
+    let expected: Vec<u32> = (0..21)
+        .filter(|&m| m != 10 && whole.scan_of(m) >= 3)
+        .collect();
+    assert_eq!(kept, expected);
+    for m in 0..21 {
+        assert_eq!(part.is_forgotten(m), !expected.contains(&m), "id {m}");
+    }
+    assert!(!part.contains(21) && !part.is_forgotten(21));
+    for &m in &kept {
+        assert_eq!(part.scan_of(m), whole.scan_of(m));
+        assert_eq!(part.position(m), whole.position(m));
+        for d in 1..=2 {
+            assert_eq!(part.forward(m, d), whole.forward(m, d), "forward of {m}");
+            let back: &[u32] = if part.scan_of(m) >= 3 + d {
+                whole.backward(m, d)
+            } else {
+                &[]
+            };
+            assert_eq!(part.backward(m, d), back, "backward of {m}, d {d}");
+        }
+    }
+    for s in 0..3 {
+        assert!(part.scan(s).is_empty());
+    }
+    assert_eq!(part.scan(3), whole.scan(3));
+    assert_eq!(
+        part.nonempty_scans(0..=9)
+            .map(|(s, _)| s)
+            .collect::<Vec<_>>(),
+        (3..10).collect::<Vec<_>>()
+    );
+    // Forgotten scans refuse measurements and windows; kept ones take both.
+    assert_eq!(
+        part.add_measurement(101, Vector2::new(1.0, 1.0)),
+        Err(Error::ScanForgotten {
+            scan: 1,
+            first_kept: 3
+        })
+    );
+    assert_eq!(
+        Partition::empty(&model, &part, 2..=9).err(),
+        Some(Error::ScanForgotten {
+            scan: 2,
+            first_kept: 3
+        })
+    );
+    assert_eq!(
+        Partition::from_tracks(&model, &part, 3..=9, &[vec![0, 6]]).err(),
+        Some(Error::MeasurementOutsideWindow { track: 0, id: 0 })
+    );
+    assert_eq!(
+        crate::smoothed_tracks(&model, &part, &[vec![0, 6]], 0).err(),
+        Some(Error::UnknownMeasurement { track: 0, id: 0 })
+    );
+    assert_eq!(part.add_measurement(103, Vector2::new(103.0, 1.0)), Ok(21));
+    assert_eq!(part.forward(21, 1), whole.forward(6, 1));
+    // Asking a forgotten id's data is a panic that says why, never another's data.
+    for m in [0, 10] {
+        let p = part.clone();
+        let err = std::panic::catch_unwind(move || p.position(m)).unwrap_err();
+        let msg = err.downcast_ref::<String>().cloned().unwrap_or_default();
+        assert!(
+            msg.contains(&format!("measurement {m} was forgotten")),
+            "{msg}"
+        );
+    }
+    // Forgetting is for good, and forgetting past the end keeps nothing.
+    part.forget_before(1);
+    assert_eq!(part.first_kept_scan(), 3);
+    part.forget_before(1_000);
+    assert_eq!(part.first_kept_scan(), 10);
+    assert_eq!(part.kept_scans(), Err(Error::EmptyProblem));
+    assert_eq!((part.n_kept_measurements(), part.n_measurements()), (0, 22));
+    assert_eq!(part.push_scan(110, &[Vector2::new(0.0, 0.0)]), Ok(vec![22]));
+    assert_eq!(part.kept_scans().unwrap(), 10..=10);
+}
+
+/// The chain over the kept scans of a problem that forgot its first ones follows exactly
+/// the chain over the same window of the whole problem: same seed, same states.
+#[test]
+fn a_chain_over_kept_scans_is_the_chain_over_the_whole_problem() {
+    let sim = SimulationConfig {
+        births_per_scan: 1.0,
+        clutter_per_scan: 3.0,
+        n_scans: 16,
+        ..SimulationConfig::default()
+    }
+    .check()
+    .unwrap()
+    .simulate(&mut ChaCha8Rng::seed_from_u64(21))
+    .unwrap();
+    let model = McmcdaConfig {
+        clutter_per_scan: 3.0,
+        ..McmcdaConfig::default()
+    }
+    .check()
+    .unwrap();
+    let whole = Problem::from_scans(&model, &sim.scans).unwrap();
+    let mut part = whole.clone();
+    part.forget_before(6);
+    let window = part.kept_scans().unwrap();
+    let a = Partition::empty(&model, &whole, window.clone()).unwrap();
+    let b = Partition::empty(&model, &part, window).unwrap();
+    let mut ca = Chain::new(a, ChaCha8Rng::seed_from_u64(3));
+    let mut cb = Chain::new(b, ChaCha8Rng::seed_from_u64(3));
+    for _ in 0..5_000 {
+        assert_eq!(ca.step(), cb.step());
+        assert_eq!(ca.state().canonical(), cb.state().canonical());
+    }
+    cb.state().check_invariants().unwrap();
+    assert!(ca.state().n_tracks() > 0);
+}
+
+/// Streaming (draining after every scan, or every few) changes nothing the tracker decides:
+/// the same estimates at every scan, and per label the drained pieces followed by what
+/// `finish` returns are the association of a run that keeps everything.
+#[test]
+fn streaming_online_gives_the_same_associations() {
+    use crate::{CommittedPiece, OnlineConfig, OnlineTracker};
+    use std::collections::BTreeMap;
+    let sim = SimulationConfig {
+        births_per_scan: 0.3,
+        clutter_per_scan: 4.0,
+        n_scans: 60,
+        ..SimulationConfig::default()
+    }
+    .check()
+    .unwrap()
+    .simulate(&mut ChaCha8Rng::seed_from_u64(8))
+    .unwrap();
+    let model = McmcdaConfig {
+        clutter_per_scan: 4.0,
+        births_per_scan: 0.3,
+        ..McmcdaConfig::default()
+    }
+    .check()
+    .unwrap();
+    let config = OnlineConfig {
+        window: 6,
+        samples_per_scan: 300,
+        ..OnlineConfig::default()
+    };
+    let run = |drain_every: Option<usize>| {
+        let mut tracker = OnlineTracker::new(model.clone(), 0, config, 4).unwrap();
+        let mut steps = Vec::new();
+        let mut pieces: Vec<CommittedPiece> = Vec::new();
+        let mut max_kept = 0;
+        for (i, s) in sim.scans.iter().enumerate() {
+            let points: Vec<Vector2<f64>> = s.measurements.iter().map(|m| m.value).collect();
+            steps.push(tracker.push_scan(s.frame, &points).unwrap());
+            if i == 30 {
+                // A late measurement near a target's: still inside the window.
+                let late = s.measurements.first().map_or(Vector2::zeros(), |m| m.value);
+                tracker
+                    .add_late(s.frame - 2, late + Vector2::new(1.0, 1.0))
+                    .unwrap();
+            }
+            if drain_every.is_some_and(|k| i % k == 0) {
+                pieces.extend(tracker.drain_committed());
+            }
+            max_kept = max_kept.max(tracker.problem().n_kept_measurements());
+        }
+        let result = tracker.finish().unwrap();
+        let mut by_label: BTreeMap<u64, Vec<u32>> = BTreeMap::new();
+        for p in &pieces {
+            by_label.entry(p.label).or_default().extend(&p.measurements);
+        }
+        for (label, meas) in &result.associations {
+            by_label.entry(*label).or_default().extend(meas);
+        }
+        (steps, by_label, max_kept, pieces, result.problem)
+    };
+    let (steps, whole, kept_all, _, all) = run(None);
+    assert!(whole.len() >= 3, "{} labels", whole.len());
+    assert_eq!(all.n_kept_measurements(), all.n_measurements());
+    for k in [1, 4] {
+        let (s, streamed, kept, pieces, _) = run(Some(k));
+        assert_eq!(s, steps, "draining every {k}");
+        assert_eq!(streamed, whole, "draining every {k}");
+        assert!(kept * 2 < kept_all, "{kept} vs {kept_all} kept");
+        assert!(!pieces.is_empty());
+        for p in &pieces {
+            let frames: Vec<u32> = p
+                .measurements
+                .iter()
+                .map(|&m| all.first_frame() + all.scan_of(m) as u32)
+                .collect();
+            let positions: Vec<Vector2<f64>> =
+                p.measurements.iter().map(|&m| all.position(m)).collect();
+            assert_eq!((&p.frames, &p.positions), (&frames, &positions));
+        }
+    }
+}
