@@ -123,6 +123,17 @@ fn bench_hmm(c: &mut Criterion) {
     c.bench_function("dense400_viterbi_T1000", |b| {
         b.iter(|| viterbi(&dense, black_box(&obs)).unwrap())
     });
+    // One Baum-Welch iteration on the dense model: the difference between these two.
+    let dense_seqs = vec![obs.clone()];
+    let mut slow = c.benchmark_group("dense400_baum_welch");
+    slow.sample_size(10);
+    slow.bench_function("dense400_baum_welch_2_iterations_T1000", |b| {
+        b.iter(|| baum_welch(&dense, black_box(&dense_seqs), &two).unwrap())
+    });
+    slow.bench_function("dense400_baum_welch_3_iterations_T1000", |b| {
+        b.iter(|| baum_welch(&dense, black_box(&dense_seqs), &three).unwrap())
+    });
+    slow.finish();
 }
 
 criterion_group!(benches, bench_hmm);

@@ -26,6 +26,16 @@ pub enum Error {
         /// The count given.
         got: usize,
     },
+    /// A matrix whose entry count rows × cols does not fit in `usize`.
+    #[error("{what}: {rows} × {cols} entries overflow the address space")]
+    SizeOverflow {
+        /// Which matrix.
+        what: &'static str,
+        /// Rows asked for.
+        rows: usize,
+        /// Columns asked for.
+        cols: usize,
+    },
     /// An observation symbol outside 0..M.
     #[error(
         "observation {index} of sequence {sequence} is symbol {symbol}, but the model has {n_symbols} symbols"

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 use tracker_model::ensure_non_negative;
 
 use crate::error::{Error, Result};
-use crate::inference::{add_xi, backward_sweep, forward_in};
+use crate::inference::{backward_with_xi, forward_in};
 use crate::model::Hmm;
 
 /// Which parts of λ stay fixed during training; frozen parts come out bit-identical.
@@ -115,7 +115,8 @@ struct Stats {
     initial: Vec<f64>,
     /// Σ_t ξ_t per stored transition entry.
     xi: Vec<f64>,
-    /// Σ_t γ_t(i) [o_t = m], row-major N × M.
+    /// Σ_t γ_t(i) [o_t = m], by symbol (M × N, row m holding state i at i): each step adds
+    /// to one contiguous row instead of N entries a row of B apart.
     emissions: Vec<f64>,
 }
 
@@ -143,22 +144,27 @@ impl Stats {
 
 fn e_step(hmm: &Hmm, obs: &[usize], sequence: usize) -> Result<Stats> {
     let n = hmm.n_states();
-    let m = hmm.n_symbols();
     let f = forward_in(hmm, obs, sequence)?;
     let mut s = Stats::zeros(hmm);
     s.log_likelihood = f.log_likelihood;
-    backward_sweep(hmm, obs, &f.scale, |t, beta, weighted| {
+    let Stats {
+        initial,
+        xi,
+        emissions,
+        ..
+    } = &mut s;
+    backward_with_xi(hmm, obs, &f, xi, |t, beta| {
         let alpha_t = &f.alpha[t * n..(t + 1) * n];
-        if let Some(w) = weighted {
-            add_xi(hmm, alpha_t, w, &mut s.xi);
-        }
+        // γ_t adds to the contiguous row of symbol o_t.
         let o = obs[t];
-        for (i, (a, b)) in alpha_t.iter().zip(beta).enumerate() {
-            let g = a * b;
-            if t == 0 {
-                s.initial[i] = g;
+        let counts = &mut emissions[o * n..(o + 1) * n];
+        for ((c, a), b) in counts.iter_mut().zip(alpha_t).zip(beta) {
+            *c += a * b;
+        }
+        if t == 0 {
+            for ((p, a), b) in initial.iter_mut().zip(alpha_t).zip(beta) {
+                *p = a * b;
             }
-            s.emissions[i * m + o] += g;
         }
     });
     Ok(s)
@@ -172,8 +178,11 @@ fn expected_counts(hmm: &Hmm, sequences: &[Vec<usize>]) -> Result<Stats> {
         .enumerate()
         .map(|(k, obs)| e_step(hmm, obs, k))
         .collect::<Result<_>>()?;
-    let mut total = Stats::zeros(hmm);
-    per_sequence.iter().for_each(|s| total.add(s));
+    // The first sequence's counts are the start of the sum (0 + x = x, so this is the sum
+    // from zero without a pass over N·M zeros).
+    let mut per_sequence = per_sequence.into_iter();
+    let mut total = per_sequence.next().unwrap_or_else(|| Stats::zeros(hmm));
+    per_sequence.for_each(|s| total.add(&s));
     Ok(total)
 }
 
@@ -229,9 +238,13 @@ fn m_step(hmm: &Hmm, stats: &Stats, cfg: &BaumWelchConfig) -> Result<Hmm> {
         hmm.emissions().to_vec()
     } else {
         let mut out = Vec::with_capacity(n * m);
+        let mut counts = vec![0.0; m];
         for i in 0..n {
+            for (c, by_symbol) in counts.iter_mut().zip(stats.emissions.chunks_exact(n)) {
+                *c = by_symbol[i];
+            }
             out.extend(renormalise(
-                &stats.emissions[i * m..(i + 1) * m],
+                &counts,
                 &hmm.emissions()[i * m..(i + 1) * m],
                 pc.emissions,
                 false,

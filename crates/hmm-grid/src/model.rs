@@ -2,6 +2,8 @@
 //! probability vectors, and the sizes fit together. Transition storage lives in
 //! [`transitions`](crate::transitions).
 
+use std::sync::OnceLock;
+
 use rand::{Rng, RngExt};
 use serde::{Deserialize, Serialize};
 
@@ -9,7 +11,7 @@ use crate::error::{Error, Result};
 use crate::transitions::{StorageChoice, Transitions, check_row};
 
 /// A discrete hidden Markov model with N states and M observation symbols.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(try_from = "RawHmm", into = "RawHmm")]
 pub struct Hmm {
     initial: Vec<f64>,
@@ -17,12 +19,35 @@ pub struct Hmm {
     /// Row-major N × M: b_i(m).
     emissions: Vec<f64>,
     n_symbols: usize,
-    /// Derived: M × N, b_·(m) contiguous for each symbol, and its logarithm; log a per stored
-    /// entry; log π.
+    /// Derived: M × N, b_·(m) contiguous for each symbol.
     by_symbol: Vec<f64>,
-    log_by_symbol: Vec<f64>,
-    log_transitions: Vec<f64>,
-    log_initial: Vec<f64>,
+    /// Derived on first use (only Viterbi needs them, so Baum-Welch's M-step, which builds a
+    /// new model per iteration, never pays for N·M + nnz logarithms).
+    logs: OnceLock<Logs>,
+}
+
+/// The logarithms Viterbi works with.
+#[derive(Debug, Clone)]
+pub(crate) struct Logs {
+    /// M × N: log b_·(m) contiguous for each symbol.
+    pub by_symbol: Vec<f64>,
+    /// log a_ij in column order: for dense storage the N × N matrix column-major (row j of
+    /// this buffer is column j of log A, so the max-plus recursion runs over contiguous
+    /// memory); for sparse storage one value per entry in the CSC order of
+    /// [`Transitions`].
+    pub transitions_by_column: Vec<f64>,
+    /// log π.
+    pub initial: Vec<f64>,
+}
+
+/// Equality of the parameters λ = (π, A, B); derived buffers and caches are not compared.
+impl PartialEq for Hmm {
+    fn eq(&self, other: &Self) -> bool {
+        self.initial == other.initial
+            && self.transitions == other.transitions
+            && self.emissions == other.emissions
+            && self.n_symbols == other.n_symbols
+    }
 }
 
 #[derive(Serialize, Deserialize)]
@@ -73,10 +98,15 @@ impl Hmm {
         if n_symbols == 0 {
             return Err(Error::Empty("symbol alphabet"));
         }
-        if emissions.len() != n * n_symbols {
+        let expected = n.checked_mul(n_symbols).ok_or(Error::SizeOverflow {
+            what: "emission matrix entries (N × M)",
+            rows: n,
+            cols: n_symbols,
+        })?;
+        if emissions.len() != expected {
             return Err(Error::ShapeMismatch {
                 what: "emission matrix entries (N × M)",
-                expected: n * n_symbols,
+                expected,
                 got: emissions.len(),
             });
         }
@@ -88,21 +118,19 @@ impl Hmm {
                 i,
             )?;
         }
-        let mut by_symbol = vec![0.0; n * n_symbols];
-        for i in 0..n {
-            for m in 0..n_symbols {
-                by_symbol[m * n + i] = emissions[i * n_symbols + m];
+        let mut by_symbol = vec![0.0; expected];
+        for (i, row) in emissions.chunks_exact(n_symbols).enumerate() {
+            for (m, &b) in row.iter().enumerate() {
+                by_symbol[m * n + i] = b;
             }
         }
         Ok(Self {
-            log_by_symbol: by_symbol.iter().map(|v| v.ln()).collect(),
-            log_transitions: transitions.values().iter().map(|v| v.ln()).collect(),
-            log_initial: initial.iter().map(|v| v.ln()).collect(),
             by_symbol,
             initial,
             transitions,
             emissions,
             n_symbols,
+            logs: OnceLock::new(),
         })
     }
 
@@ -142,30 +170,42 @@ impl Hmm {
         &self.by_symbol[m * n..(m + 1) * n]
     }
 
-    /// log b_·(m) for every state.
-    pub(crate) fn log_emission_column(&self, m: usize) -> &[f64] {
-        let n = self.n_states();
-        &self.log_by_symbol[m * n..(m + 1) * n]
-    }
-
-    /// log a per stored entry.
-    pub(crate) fn log_transitions(&self) -> &[f64] {
-        &self.log_transitions
-    }
-
-    /// log π.
-    pub(crate) fn log_initial(&self) -> &[f64] {
-        &self.log_initial
+    /// The logarithms of π, A (column order) and B (by symbol), computed on first use.
+    pub(crate) fn logs(&self) -> &Logs {
+        self.logs.get_or_init(|| {
+            let a = &self.transitions;
+            let n = self.n_states();
+            let transitions_by_column = match (a.dense_rows(), a.sparse_view()) {
+                (Some(rows), _) => {
+                    let mut out = vec![0.0; rows.len()];
+                    for (i, row) in rows.chunks_exact(n).enumerate() {
+                        for (j, v) in row.iter().enumerate() {
+                            out[j * n + i] = v.ln();
+                        }
+                    }
+                    out
+                }
+                (None, Some(view)) => view.col_values.iter().map(|v| v.ln()).collect(),
+                (None, None) => Vec::new(),
+            };
+            Logs {
+                by_symbol: self.by_symbol.iter().map(|v| v.ln()).collect(),
+                transitions_by_column,
+                initial: self.initial.iter().map(|v| v.ln()).collect(),
+            }
+        })
     }
 
     /// The same model with its transitions stored as `storage` says: for comparing the dense
     /// and sparse paths, or choosing by fill after building A by hand.
     pub fn with_transition_storage(&self, storage: StorageChoice) -> Self {
-        let transitions = self.transitions.to_storage(storage);
         Self {
-            log_transitions: transitions.values().iter().map(|v| v.ln()).collect(),
-            transitions,
-            ..self.clone()
+            initial: self.initial.clone(),
+            transitions: self.transitions.to_storage(storage),
+            emissions: self.emissions.clone(),
+            n_symbols: self.n_symbols,
+            by_symbol: self.by_symbol.clone(),
+            logs: OnceLock::new(),
         }
     }
 

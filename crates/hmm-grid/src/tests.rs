@@ -863,3 +863,27 @@ fn state_paths_become_tracks() {
     );
     assert!(space.path_to_track(&[0, 0], u32::MAX, TrackId(0)).is_err());
 }
+
+#[test]
+fn sizes_that_overflow_are_typed_errors() {
+    // N × N and N × M entry counts past usize::MAX: an error, not a wrapped product (which
+    // could even match the length given) or a panic.
+    let n = 1usize << (usize::BITS / 2);
+    assert!(matches!(
+        Transitions::dense(n, vec![]),
+        Err(Error::SizeOverflow { rows, cols, .. }) if rows == n && cols == n
+    ));
+    assert!(matches!(
+        Transitions::from_row_major(usize::MAX, vec![1.0], StorageChoice::Auto),
+        Err(Error::SizeOverflow { .. })
+    ));
+    let a = Transitions::dense(2, vec![0.5, 0.5, 0.5, 0.5]).unwrap();
+    assert!(matches!(
+        Hmm::new(vec![0.5, 0.5], a, vec![1.0], usize::MAX),
+        Err(Error::SizeOverflow {
+            rows: 2,
+            cols: usize::MAX,
+            ..
+        })
+    ));
+}

@@ -129,10 +129,15 @@ impl Transitions {
         if n == 0 {
             return Err(Error::Empty("transition matrix"));
         }
-        if values.len() != n * n {
+        let expected = n.checked_mul(n).ok_or(Error::SizeOverflow {
+            what: "transition matrix entries (N × N)",
+            rows: n,
+            cols: n,
+        })?;
+        if values.len() != expected {
             return Err(Error::ShapeMismatch {
                 what: "transition matrix entries (N × N)",
-                expected: n * n,
+                expected,
                 got: values.len(),
             });
         }
@@ -343,6 +348,32 @@ impl Transitions {
         }
     }
 
+    /// Sparse storage as plain slices for the hot loops: (row pointers, column of each entry,
+    /// value of each entry) in row order (CSR), and (column pointers, row of each entry, value
+    /// of each entry) in column order (CSC). The column-ordered copy of the values makes a
+    /// gather down a column one load per non-zero instead of an index load and a dependent
+    /// value load.
+    pub(crate) fn sparse_view(&self) -> Option<SparseView<'_>> {
+        match &self.layout {
+            Layout::Dense => None,
+            Layout::Sparse {
+                row_ptr,
+                cols,
+                col_ptr,
+                col_rows,
+                col_values,
+                ..
+            } => Some(SparseView {
+                row_ptr,
+                cols,
+                values: &self.values,
+                col_ptr,
+                col_rows,
+                col_values,
+            }),
+        }
+    }
+
     /// The storage range of row `i`.
     pub(crate) fn row_range(&self, i: usize) -> std::ops::Range<usize> {
         match &self.layout {
@@ -379,6 +410,22 @@ impl Transitions {
         }
         Ok(out)
     }
+}
+
+/// Borrowed CSR and CSC slices of a sparse [`Transitions`] (see [`Transitions::sparse_view`]).
+pub(crate) struct SparseView<'a> {
+    /// CSR row pointers (N + 1).
+    pub row_ptr: &'a [usize],
+    /// Column of each entry, row order.
+    pub cols: &'a [usize],
+    /// Value of each entry, row order (the storage order).
+    pub values: &'a [f64],
+    /// CSC column pointers (N + 1).
+    pub col_ptr: &'a [usize],
+    /// Row of each entry, column order.
+    pub col_rows: &'a [usize],
+    /// Value of each entry, column order.
+    pub col_values: &'a [f64],
 }
 
 /// The CSC index of a CSR pattern: (column pointers, row of each entry, storage index of each

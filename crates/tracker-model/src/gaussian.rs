@@ -217,6 +217,11 @@ impl<const N: usize> CholeskyFactor<N> {
         SMatrix::from_fn(|i, c| x[i][c])
     }
 
+    /// 1 / Lᵢᵢ.
+    pub fn inv_diag(&self, i: usize) -> f64 {
+        self.inv_diag[i]
+    }
+
     /// ½ log det A = Σ log Lᵢᵢ.
     pub fn half_log_det(&self) -> f64 {
         (0..N).map(|i| self.l[i][i].ln()).sum()

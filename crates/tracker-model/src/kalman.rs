@@ -1,7 +1,7 @@
 //! The Kalman filter over a sequence with missing measurements, and the Rauch-Tung-Striebel
 //! smoother.
 
-use nalgebra::SVector;
+use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -97,6 +97,9 @@ where
 /// Rauch-Tung-Striebel smoothing of a filter run made with the same `transition`:
 /// C_k = P_k Fᵀ (P⁻_{k+1})⁻¹, x^s_k = x_k + C_k (x^s_{k+1} − x⁻_{k+1}),
 /// P^s_k = P_k + C_k (P^s_{k+1} − P⁻_{k+1}) C_kᵀ.
+///
+/// Each step is [`TransitionModel::smooth_step`]: the Cholesky route of [`rts_step`] unless
+/// the model has a faster one with the same result.
 pub fn smooth<T, const N: usize>(transition: &T, run: &FilterRun<N>) -> Result<Vec<Gaussian<N>>>
 where
     T: TransitionModel<N> + ?Sized,
@@ -105,20 +108,39 @@ where
         return Err(Error::Empty { what: "filter run" });
     };
     let f = transition.transition_matrix(1);
-    let mut out = vec![last.filtered.clone(); run.steps.len()];
+    let mut out = Vec::with_capacity(run.steps.len());
+    out.push(last.filtered.clone());
+    // Built from the last step backwards, then put in time order.
     for k in (0..run.steps.len() - 1).rev() {
-        let filtered = &run.steps[k].filtered;
-        let next_pred = &run.steps[k + 1].predicted;
-        let chol = CholeskyFactor::new(next_pred.covariance(), "predicted covariance")?;
-        // Cᵀ = (P⁻_{k+1})⁻¹ F P_k, using the symmetry of both covariances.
-        let gain = chol.solve(&(f * filtered.covariance())).transpose();
-        let next = &out[k + 1];
-        let mean = filtered.mean() + gain * (next.mean() - next_pred.mean());
-        let cov = symmetrise(
-            &(filtered.covariance()
-                + gain * (next.covariance() - next_pred.covariance()) * gain.transpose()),
-        );
-        out[k] = Gaussian::from_parts(mean, cov);
+        let next = out.last().unwrap_or(&last.filtered);
+        let step = transition.smooth_step(
+            &f,
+            &run.steps[k].filtered,
+            &run.steps[k + 1].predicted,
+            next,
+        )?;
+        out.push(step);
     }
+    out.reverse();
     Ok(out)
+}
+
+/// One RTS step by the general route: the Cholesky factor of P⁻_{k+1} gives the gain
+/// Cᵀ = (P⁻_{k+1})⁻¹ F P_k (using the symmetry of both covariances), then
+/// x^s_k = x_k + C (x^s_{k+1} − x⁻_{k+1}) and P^s_k = P_k + C (P^s_{k+1} − P⁻_{k+1}) Cᵀ.
+/// `f` is the one-period transition matrix.
+pub fn rts_step<const N: usize>(
+    f: &SMatrix<f64, N, N>,
+    filtered: &Gaussian<N>,
+    next_predicted: &Gaussian<N>,
+    next_smoothed: &Gaussian<N>,
+) -> Result<Gaussian<N>> {
+    let chol = CholeskyFactor::new(next_predicted.covariance(), "predicted covariance")?;
+    let gain = chol.solve(&(f * filtered.covariance())).transpose();
+    let mean = filtered.mean() + gain * (next_smoothed.mean() - next_predicted.mean());
+    let cov = symmetrise(
+        &(filtered.covariance()
+            + gain * (next_smoothed.covariance() - next_predicted.covariance()) * gain.transpose()),
+    );
+    Ok(Gaussian::from_parts(mean, cov))
 }

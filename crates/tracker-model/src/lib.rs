@@ -80,11 +80,11 @@ pub use gaussian::{
 };
 pub use geometry::{BoundingBox, Region, Region2, Vec2, bearing_rad, wrap_angle_rad};
 pub use grid::{LikelihoodGrid, Peak, PeakConfig};
-pub use kalman::{FilterRun, FilterStep, filter, smooth};
+pub use kalman::{FilterRun, FilterStep, filter, rts_step, smooth};
 pub use models::{
     ConstantVelocity2, CvNoise, CvState, FullStateMeasurement, Innovation, LinearObservation,
     LinearTransition, ObservationModel, PositionMeasurement2, RandomWalk, TransitionModel, Updated,
-    full_state_measurement, position_measurement,
+    axes_uncoupled, full_state_measurement, position_measurement,
 };
 pub use mot::{MotFile, MotRow, format_mot, parse_mot, read_mot};
 pub use simulate::{Simulation, SimulationConfig, Simulator};

@@ -109,30 +109,6 @@ pub fn read_mot<R: BufRead>(reader: R) -> Result<MotFile> {
     Ok(file)
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn boxes_whose_size_is_lost_to_rounding_are_refused() {
-        // Found by the eval fuzzer: at left = 3.3e17 the f64 grid is 64 apart, so a 20-wide
-        // box did not match itself (IoU 0). Far-out but representable boxes still load.
-        let far = "2,1,333333333333333311,20,20,40,1,-1,-1,-1\n";
-        assert!(matches!(
-            read_mot(far.as_bytes()),
-            Err(Error::BoxBeyondPrecision { line: 1, .. })
-        ));
-        let tall = "2,1,0,1e300,20,40,1,-1,-1,-1\n";
-        assert!(matches!(
-            read_mot(tall.as_bytes()),
-            Err(Error::BoxBeyondPrecision { .. })
-        ));
-        let utm = "2,1,4500000.25,600000.5,0.75,1.5,1,-1,-1,-1\n";
-        let rows = read_mot(utm.as_bytes()).map(|f| f.rows).unwrap_or_default();
-        assert_eq!(rows.len(), 1);
-        assert!((rows[0].bbox.iou(&rows[0].bbox) - 1.0).abs() < 1e-9);
-    }
-}
 
 /// A header names the columns: as many fields as a row, none of them a number.
 fn is_header(text: &str) -> bool {
@@ -260,5 +236,30 @@ impl TrackSet {
             }
         }
         rows
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn boxes_whose_size_is_lost_to_rounding_are_refused() {
+        // Found by the eval fuzzer: at left = 3.3e17 the f64 grid is 64 apart, so a 20-wide
+        // box did not match itself (IoU 0). Far-out but representable boxes still load.
+        let far = "2,1,333333333333333311,20,20,40,1,-1,-1,-1\n";
+        assert!(matches!(
+            read_mot(far.as_bytes()),
+            Err(Error::BoxBeyondPrecision { line: 1, .. })
+        ));
+        let tall = "2,1,0,1e300,20,40,1,-1,-1,-1\n";
+        assert!(matches!(
+            read_mot(tall.as_bytes()),
+            Err(Error::BoxBeyondPrecision { .. })
+        ));
+        let utm = "2,1,4500000.25,600000.5,0.75,1.5,1,-1,-1,-1\n";
+        let rows = read_mot(utm.as_bytes()).map(|f| f.rows).unwrap_or_default();
+        assert_eq!(rows.len(), 1);
+        assert!((rows[0].bbox.iou(&rows[0].bbox) - 1.0).abs() < 1e-9);
     }
 }

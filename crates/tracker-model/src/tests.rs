@@ -154,6 +154,164 @@ fn rts_smoother_matches_batch_information_form_solution() {
     assert_eq!(smoothed[19], run.steps[19].filtered);
 }
 
+/// A model seen only through F and Q: every other method is the trait's general default
+/// (4 × 4 products, Cholesky RTS step).
+struct GeneralTransition(ConstantVelocity2);
+
+impl TransitionModel<4> for GeneralTransition {
+    fn transition_matrix(&self, steps: u32) -> Matrix4<f64> {
+        self.0.transition_matrix(steps)
+    }
+    fn process_noise(&self, steps: u32) -> Matrix4<f64> {
+        self.0.process_noise(steps)
+    }
+}
+
+/// A sensor seen only through H and R: the trait's general Joseph-form update.
+struct GeneralObservation(PositionMeasurement2);
+
+impl ObservationModel<4, 2> for GeneralObservation {
+    fn observation_matrix(&self) -> SMatrix<f64, 2, 4> {
+        self.0.observation_matrix()
+    }
+    fn measurement_noise(&self) -> Matrix2<f64> {
+        self.0.measurement_noise()
+    }
+}
+
+/// A random symmetric positive-definite matrix B Bᵀ + εI.
+fn random_spd<const N: usize>(g: &mut ChaCha8Rng, scale: f64) -> SMatrix<f64, N, N> {
+    let b = SMatrix::<f64, N, N>::from_fn(|_, _| StandardNormal.sample(g));
+    (b * b.transpose() + SMatrix::identity() * 0.1) * scale
+}
+
+/// The constant-velocity fast paths (closed-form prediction, the update with H = [I 0] read
+/// off P and, for uncoupled axes, done axis by axis; the RTS step on 2 × 2 blocks) against
+/// the general route on random models: random Δ, both noise forms, diagonal and full R,
+/// uncoupled and full priors, missing scans. The general route is the trait defaults, an
+/// independent computation of the same formulas with full 4 × 4 products and Cholesky solves.
+#[test]
+fn constant_velocity_fast_paths_match_the_general_route() {
+    let mut g = rng(21);
+    let mut by_axis = 0;
+    for case in 0..60 {
+        let uniform = |g: &mut ChaCha8Rng, lo: f64, hi: f64| {
+            let u: f64 = rand::RngExt::random(g);
+            lo + (hi - lo) * u
+        };
+        let dt = uniform(&mut g, 0.05, 3.0);
+        let noise = if case % 3 == 0 {
+            CvNoise::WhiteAcceleration {
+                q: uniform(&mut g, 0.01, 5.0),
+            }
+        } else if case % 3 == 1 {
+            CvNoise::Discrete {
+                acceleration_covariance: Matrix2::new(
+                    uniform(&mut g, 0.01, 5.0),
+                    0.0,
+                    0.0,
+                    uniform(&mut g, 0.01, 5.0),
+                ),
+            }
+        } else {
+            CvNoise::Discrete {
+                acceleration_covariance: random_spd::<2>(&mut g, 1.0),
+            }
+        };
+        let motion = ConstantVelocity2::new(dt, noise).unwrap();
+        let uncoupled = case % 2 == 0 && case % 3 != 2;
+        let r = if uncoupled || case % 5 == 1 {
+            Matrix2::new(
+                uniform(&mut g, 0.1, 9.0),
+                0.0,
+                0.0,
+                uniform(&mut g, 0.1, 9.0),
+            )
+        } else {
+            random_spd::<2>(&mut g, 2.0)
+        };
+        let sensor = LinearObservation::leading_components(r).unwrap();
+        let prior_cov = if uncoupled {
+            let (x, y) = (random_spd::<2>(&mut g, 5.0), random_spd::<2>(&mut g, 5.0));
+            let mut p = Matrix4::zeros();
+            for (block, axis) in [(x, 0), (y, 1)] {
+                for a in 0..2 {
+                    for b in 0..2 {
+                        p[(axis + 2 * a, axis + 2 * b)] = block[(a, b)];
+                    }
+                }
+            }
+            p
+        } else {
+            random_spd::<4>(&mut g, 5.0)
+        };
+        let prior_mean = Vector4::from_fn(|_, _| StandardNormal.sample(&mut g));
+        let prior = Gaussian::new(prior_mean, prior_cov).unwrap();
+        let zs: Vec<Option<Vector2<f64>>> = (0..150)
+            .map(|k| {
+                let t = k as f64 * dt;
+                let n: [f64; 2] = [StandardNormal.sample(&mut g), StandardNormal.sample(&mut g)];
+                (uniform(&mut g, 0.0, 1.0) > 0.15).then(|| Vector2::new(t + n[0], 2.0 * t + n[1]))
+            })
+            .collect();
+        let fast = filter(&motion, &sensor, &prior, &zs).unwrap();
+        let general = filter(
+            &GeneralTransition(motion),
+            &GeneralObservation(sensor),
+            &prior,
+            &zs,
+        )
+        .unwrap();
+        let close = |a: f64, b: f64, what: &str| {
+            assert!(
+                (a - b).abs() <= 1e-12 * a.abs().max(b.abs()).max(1.0),
+                "case {case}: {what}: {a} vs {b}"
+            );
+        };
+        let close_gaussian = |a: &Gaussian<4>, b: &Gaussian<4>, what: &str| {
+            for i in 0..4 {
+                close(a.mean()[i], b.mean()[i], what);
+                for j in 0..4 {
+                    close(a.covariance()[(i, j)], b.covariance()[(i, j)], what);
+                }
+            }
+        };
+        for (f, gs) in fast.steps.iter().zip(&general.steps) {
+            close_gaussian(&f.predicted, &gs.predicted, "predicted");
+            close_gaussian(&f.filtered, &gs.filtered, "filtered");
+            assert_eq!(f.log_likelihood.is_some(), gs.log_likelihood.is_some());
+            if let (Some(a), Some(b)) = (f.log_likelihood, gs.log_likelihood) {
+                close(a, b, "log-likelihood");
+            }
+            if let (Some(a), Some(b)) = (f.innovation_mahalanobis_sq, gs.innovation_mahalanobis_sq)
+            {
+                close(a, b, "innovation Mahalanobis distance");
+            }
+        }
+        let (smoothed_fast, smoothed_general) = (
+            smooth(&motion, &fast).unwrap(),
+            smooth(&GeneralTransition(motion), &general).unwrap(),
+        );
+        for (a, b) in smoothed_fast.iter().zip(&smoothed_general) {
+            close_gaussian(a, b, "smoothed");
+        }
+        if fast
+            .steps
+            .iter()
+            .all(|s| axes_uncoupled(s.filtered.covariance()))
+        {
+            by_axis += 1;
+        }
+        assert_eq!(
+            uncoupled,
+            axes_uncoupled(fast.steps[149].filtered.covariance()),
+            "case {case}"
+        );
+    }
+    // Both branches were exercised.
+    assert!((10..50).contains(&by_axis), "{by_axis} uncoupled cases");
+}
+
 /// Published χ² table values (e.g. NIST/SEMATECH e-Handbook, table 1.3.6.7.4): the
 /// approximation must be within 0.1 %.
 #[test]
