@@ -236,7 +236,7 @@ impl Transitions {
             StorageChoice::Sparse => true,
             StorageChoice::Auto => {
                 let nnz = self.values.iter().filter(|v| **v != 0.0).count();
-                (nnz as f64) <= SPARSE_FILL * (self.n * self.n) as f64
+                (nnz as f64) <= SPARSE_FILL * (self.n as f64) * (self.n as f64)
             }
         };
         if sparse {
