@@ -302,6 +302,7 @@ fn run_typed<P: Pipeline>(params: &toml::Table, seed: u64, env: &Env<'_>) -> Res
 /// Every pipeline by the name a scenario file gives it.
 const PIPELINES: &[(&str, RunFn)] = &[
     ("audio-doa", run_typed::<pipelines::audio::AudioDoa>),
+    ("av-fusion", run_typed::<pipelines::av_fusion::AvFusion>),
     (
         "dmtim-seven-radars",
         run_typed::<pipelines::dmtim::DmtimSevenRadars>,

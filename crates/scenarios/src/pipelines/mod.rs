@@ -1,6 +1,7 @@
 //! The pipelines a scenario file can name; `PIPELINES` in lib.rs registers them.
 
 pub mod audio;
+pub mod av_fusion;
 pub mod dmtim;
 pub mod gdt;
 pub mod hmm;

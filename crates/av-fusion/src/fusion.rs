@@ -1,0 +1,387 @@
+//! Grid likelihoods and their fusion (our algorithms.md §5.4): each selected sensor's profile
+//! is projected onto the grid with tracker-model's [`BearingProfile::project`]
+//! (L_s(c) = D_s(θ_{s,c})), the grids are fused by a weighted sum or a floored product, and the
+//! fused grid's peaks, with covariances from their shape, are the tracker's measurements.
+//!
+//! [`BearingProfile::project`]: tracker_model::BearingProfile::project
+
+use nalgebra::Matrix2;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use tracker_model::{
+    GridNormalisation, LikelihoodGrid, PeakConfig, ProjectionConfig, Region2, Vec2,
+    ensure_in_range, ensure_non_negative, ensure_positive,
+};
+
+use crate::buffer::Snapshot;
+use crate::error::{Result, invalid};
+use crate::node::{SensorKind, SensorNode};
+
+/// How each sensor's grid is scaled before a weighted sum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SumScaling {
+    /// max_c L_s(c) = 1: every sensor's ridge has height w_s, so the cell on all the ridges
+    /// stands Σ w_s high and a crossing of two ridges only w_a + w_b (default).
+    #[default]
+    Max,
+    /// Σ_c L_s(c) = 1: every sensor brings the same evidence mass, so a narrow profile (a
+    /// camera's, 0.5° bins) concentrates its mass on few cells and its ridge outweighs the
+    /// broad audio lobes everywhere along it.
+    Sum,
+}
+
+/// How the per-sensor grids are combined.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum FusionRule {
+    /// L(c) ∝ Σ_s w_s L_s(c), each L_s scaled as `scaling` says: a sensor that misses the
+    /// target, or is wrong, dilutes the peak but cannot remove it. A silent sensor (all-zero
+    /// profile) adds nothing.
+    WeightedSum {
+        /// Per-sensor scaling.
+        scaling: SumScaling,
+    },
+    /// L(c) ∝ Π_s (ε + (1 − ε) L_s(c) / max L_s)^{w_s}: each grid is scaled to maximum 1 and
+    /// lifted to the floor ε = `floor` before the weighted product, so a sensor that sees
+    /// nothing where the others do lowers the cell by at most a factor ε^{w_s} instead of
+    /// vetoing it. ε = 0 is the plain product, where one zero vetoes the cell. A silent
+    /// sensor is the constant ε everywhere, which the normalisation removes.
+    Product {
+        /// ε ∈ [0, 1).
+        floor: f64,
+    },
+}
+
+/// Which modalities a fusion uses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Modalities {
+    /// Audio nodes only.
+    Audio,
+    /// Video nodes only.
+    Video,
+    /// Both.
+    #[default]
+    Both,
+}
+
+impl Modalities {
+    /// Whether nodes of `kind` take part.
+    pub fn includes(self, kind: SensorKind) -> bool {
+        matches!(
+            (self, kind),
+            (Self::Both, _) | (Self::Audio, SensorKind::Audio) | (Self::Video, SensorKind::Video)
+        )
+    }
+}
+
+/// Peak extraction: local maxima of the fused grid at least `relative_threshold` × its
+/// maximum and at least `min_contrast` × the grid's mean value (1/n_cells for a fused grid,
+/// which sums to 1), thinned by non-maximum
+/// suppression within `suppression_radius_m`, at most `max_peaks`, strongest first. Each
+/// peak's position and covariance are the mean and second central moment of the cells within
+/// `moment_radius_m` of it whose value is at least `moment_fraction` × the peak's, weighted by
+/// their excess over that level, plus the cell's own quantisation variance s²/12 per axis.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PeakExtraction {
+    /// κ ∈ (0, 1].
+    pub relative_threshold: f64,
+    /// Peaks below this multiple of the grid's mean value are dropped (≥ 0; 0 keeps all):
+    /// a grid with no target is nearly flat and its strongest bump is no measurement.
+    pub min_contrast: f64,
+    /// NMS radius, metres (≈ the target size).
+    pub suppression_radius_m: f64,
+    /// Radius of the moment window, metres (> 0).
+    pub moment_radius_m: f64,
+    /// Cells below this fraction of the peak are outside its shape, in [0, 1).
+    pub moment_fraction: f64,
+    /// At most this many peaks per scan.
+    pub max_peaks: usize,
+    /// Peaks whose cell lies within this many cells of the grid's edge are dropped: a
+    /// target outside the region pulls the likelihood up towards the edge, and the edge
+    /// cells then hold a local maximum that is not a target inside (0 keeps them).
+    pub border_cells: usize,
+}
+
+impl Default for PeakExtraction {
+    fn default() -> Self {
+        Self {
+            relative_threshold: 0.3,
+            min_contrast: 0.0,
+            suppression_radius_m: 3.0,
+            moment_radius_m: 2.0,
+            moment_fraction: 0.5,
+            max_peaks: 8,
+            border_cells: 1,
+        }
+    }
+}
+
+/// The grid, the rule and the peaks.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FusionConfig {
+    /// The region covered, metres.
+    pub region: Region2,
+    /// Side of a square cell, metres.
+    pub cell_size_m: f64,
+    /// Cells farther than this from a sensor get nothing from it (`None`: unlimited).
+    pub max_range_m: Option<f64>,
+    /// Cells nearer than this to a sensor get nothing from it (the bearing is undefined there).
+    pub min_range_m: f64,
+    /// How grids combine.
+    pub rule: FusionRule,
+    /// Which modalities take part.
+    pub modalities: Modalities,
+    /// How peaks are extracted.
+    pub peaks: PeakExtraction,
+}
+
+impl FusionConfig {
+    /// Checks every field.
+    pub fn check(&self) -> Result<()> {
+        ensure_positive(self.cell_size_m, "cell_size_m")?;
+        ProjectionConfig {
+            normalisation: GridNormalisation::None,
+            max_range_m: self.max_range_m,
+            min_range_m: self.min_range_m,
+        }
+        .check()?;
+        if let FusionRule::Product { floor } = self.rule
+            && !(floor.is_finite() && (0.0..1.0).contains(&floor))
+        {
+            return Err(invalid("floor", format!("{floor} is outside [0, 1)")));
+        }
+        let p = &self.peaks;
+        if !(p.relative_threshold > 0.0 && p.relative_threshold <= 1.0) {
+            return Err(invalid(
+                "relative_threshold",
+                format!("{} is outside (0, 1]", p.relative_threshold),
+            ));
+        }
+        ensure_non_negative(p.min_contrast, "min_contrast")?;
+        ensure_non_negative(p.suppression_radius_m, "suppression_radius_m")?;
+        ensure_positive(p.moment_radius_m, "moment_radius_m")?;
+        ensure_in_range(p.moment_fraction, 0.0, 1.0, "moment_fraction")?;
+        if p.moment_fraction >= 1.0 {
+            return Err(invalid("moment_fraction", "must be below 1"));
+        }
+        // The grid itself: LikelihoodGrid::zeros checks the cell count.
+        LikelihoodGrid::zeros(self.region, self.cell_size_m)?;
+        Ok(())
+    }
+
+    fn projection(&self) -> ProjectionConfig {
+        ProjectionConfig {
+            normalisation: GridNormalisation::None,
+            max_range_m: self.max_range_m,
+            min_range_m: self.min_range_m,
+        }
+    }
+}
+
+/// A peak of the fused grid as a measurement.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PeakMeasurement {
+    /// Weighted mean of the peak's shape, metres.
+    pub position: Vec2,
+    /// Second central moment of the shape plus s²/12 per axis (symmetric positive definite).
+    pub covariance: Matrix2<f64>,
+    /// The fused grid's value at the peak cell.
+    pub value: f64,
+}
+
+/// The result of fusing one tick.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FusedScan {
+    /// Tick index.
+    pub tick: u64,
+    /// Fusion time of the tick.
+    pub time_s: f64,
+    /// Sensors whose grids were fused (present in the snapshot, of the chosen modalities,
+    /// with weight > 0), in sensor order.
+    pub used: Vec<usize>,
+    /// The fused grid (sums to 1; all zero when no sensor had evidence).
+    pub grid: LikelihoodGrid,
+    /// Its peaks, strongest first.
+    pub peaks: Vec<PeakMeasurement>,
+}
+
+/// Projects the snapshot's profiles of `sensors` onto the grid, fuses them and extracts the
+/// peaks. Sensors are projected in parallel and combined in sensor order, so the result does
+/// not depend on the thread count. `config` must have passed [`FusionConfig::check`].
+pub fn fuse_snapshot(
+    sensors: &[SensorNode],
+    snapshot: &Snapshot<'_>,
+    config: &FusionConfig,
+) -> Result<FusedScan> {
+    let projection = config.projection();
+    let chosen: Vec<_> = snapshot
+        .selected
+        .iter()
+        .filter(|s| {
+            sensors
+                .get(s.sensor)
+                .is_some_and(|n| n.weight > 0.0 && config.modalities.includes(n.kind))
+        })
+        .collect();
+    let grids: Vec<(usize, f64, LikelihoodGrid)> = chosen
+        .par_iter()
+        .map(|s| {
+            let node = &sensors[s.sensor];
+            let grid = node.profile(s.values.to_vec())?.project(
+                config.region,
+                config.cell_size_m,
+                &projection,
+            )?;
+            Ok((s.sensor, node.weight, grid))
+        })
+        .collect::<Result<_>>()?;
+    let grid = fuse_grids(
+        config.region,
+        config.cell_size_m,
+        grids.iter().map(|(_, w, g)| (g, *w)),
+        config.rule,
+    )?;
+    let peaks = extract_peaks(&grid, &config.peaks)?;
+    Ok(FusedScan {
+        tick: snapshot.tick,
+        time_s: snapshot.time_s,
+        used: grids.iter().map(|(s, _, _)| *s).collect(),
+        grid,
+        peaks,
+    })
+}
+
+/// Fuses unnormalised grids (all over `region` with cells of `cell_size_m`) with their
+/// weights by `rule`; the result sums to 1, or is all zero when no grid carries evidence.
+pub fn fuse_grids<'a>(
+    region: Region2,
+    cell_size_m: f64,
+    grids: impl IntoIterator<Item = (&'a LikelihoodGrid, f64)>,
+    rule: FusionRule,
+) -> Result<LikelihoodGrid> {
+    let mut out = LikelihoodGrid::zeros(region, cell_size_m)?;
+    let (cols, rows) = out.shape();
+    let n = cols * rows;
+    let mut acc = vec![0.0; n];
+    let mut any = false;
+    for (g, w) in grids {
+        if g.shape() != (cols, rows) || g.region() != &region {
+            return Err(tracker_model::Error::ShapeMismatch(
+                "a sensor grid does not cover the fusion grid's cells".into(),
+            )
+            .into());
+        }
+        ensure_non_negative(w, "fusion weight")?;
+        let v = g.values();
+        match rule {
+            FusionRule::WeightedSum { scaling } => {
+                let total: f64 = match scaling {
+                    SumScaling::Sum => v.iter().sum(),
+                    SumScaling::Max => v.iter().copied().fold(0.0, f64::max),
+                };
+                if total > 0.0 && w > 0.0 {
+                    any = true;
+                    let k = w / total;
+                    acc.iter_mut().zip(v).for_each(|(a, x)| *a += k * x);
+                }
+            }
+            FusionRule::Product { floor } => {
+                let max = v.iter().copied().fold(0.0, f64::max);
+                if max > 0.0 && w > 0.0 {
+                    any = true;
+                    let scale = (1.0 - floor) / max;
+                    acc.iter_mut()
+                        .zip(v)
+                        .for_each(|(a, x)| *a += w * (floor + scale * x).ln());
+                }
+            }
+        }
+    }
+    if !any {
+        return Ok(out);
+    }
+    if let FusionRule::Product { .. } = rule {
+        let top = acc.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        if top == f64::NEG_INFINITY {
+            // Every cell vetoed by some sensor (ε = 0): no evidence anywhere.
+            return Ok(out);
+        }
+        acc.iter_mut().for_each(|a| *a = (*a - top).exp());
+    }
+    let total: f64 = acc.iter().sum();
+    for row in 0..rows {
+        for col in 0..cols {
+            out.set(col, row, acc[row * cols + col] / total)?;
+        }
+    }
+    Ok(out)
+}
+
+/// The peaks of a grid as measurements (see [`PeakExtraction`]).
+pub fn extract_peaks(
+    grid: &LikelihoodGrid,
+    config: &PeakExtraction,
+) -> Result<Vec<PeakMeasurement>> {
+    let mut raw = grid.peaks(&PeakConfig {
+        relative_threshold: config.relative_threshold,
+        suppression_radius: config.suppression_radius_m,
+    })?;
+    let (cols, rows) = grid.shape();
+    let mean = grid.values().iter().sum::<f64>() / (cols * rows) as f64;
+    let b = config.border_cells;
+    raw.retain(|p| {
+        p.value >= config.min_contrast * mean
+            && grid
+                .cell_of(&p.position)
+                .is_some_and(|(c, r)| c >= b && r >= b && c + b < cols && r + b < rows)
+    });
+    raw.truncate(config.max_peaks);
+    let s = grid.cell_size();
+    let reach = (config.moment_radius_m / s).ceil() as isize;
+    let r2 = config.moment_radius_m * config.moment_radius_m;
+    let quantisation = s * s / 12.0;
+    let mut out = Vec::with_capacity(raw.len());
+    for p in raw {
+        let Some((pc, pr)) = grid.cell_of(&p.position) else {
+            continue;
+        };
+        let level = config.moment_fraction * p.value;
+        let mut cells: Vec<(Vec2, f64)> = Vec::new();
+        for dr in -reach..=reach {
+            for dc in -reach..=reach {
+                let (c, r) = (pc as isize + dc, pr as isize + dr);
+                if c < 0 || r < 0 || c >= cols as isize || r >= rows as isize {
+                    continue;
+                }
+                let centre = grid.cell_centre(c as usize, r as usize);
+                let v = grid.value(c as usize, r as usize);
+                if (centre - p.position).norm_squared() <= r2 && v >= level {
+                    cells.push((centre, v - level));
+                }
+            }
+        }
+        let total: f64 = cells.iter().map(|c| c.1).sum();
+        let (mean, cov) = if total > 0.0 {
+            let mean = cells.iter().map(|(q, w)| q * *w).sum::<Vec2>() / total;
+            let cov = cells
+                .iter()
+                .map(|(q, w)| (q - mean) * (q - mean).transpose() * *w)
+                .sum::<Matrix2<f64>>()
+                / total;
+            (mean, cov)
+        } else {
+            // A flat peak (moment_fraction 0 on a plateau): the cell itself.
+            (p.position, Matrix2::zeros())
+        };
+        out.push(PeakMeasurement {
+            position: mean,
+            covariance: cov + Matrix2::identity() * quantisation,
+            value: p.value,
+        });
+    }
+    Ok(out)
+}

@@ -1,0 +1,221 @@
+//! Sensor nodes as the fusion node knows them (kind, pose, profile layout, clock offset,
+//! weight) and the reports they send.
+//!
+//! A node sends only its profile values and the time stamp of its own clock; the fusion node
+//! holds the pose (from calibration, possibly wrong) and the profile layout, and turns the
+//! values into a [`BearingProfile`] when it projects them. So a calibration error is a wrong
+//! pose here, not a change in what the sensor measures.
+
+use sensors_audio::{Beamform, EnergyScaling};
+use sensors_video::AngleProfiler;
+use serde::{Deserialize, Serialize};
+use tracker_model::{BearingProfile, SensorPose, ensure_non_negative};
+
+use crate::error::{Error, Result, invalid};
+
+/// What a node senses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SensorKind {
+    /// A microphone array reporting beam energies over the full circle.
+    Audio,
+    /// A camera reporting foreground pixels per angle over its field of view.
+    Video,
+}
+
+/// How a report's values lie over angle (sensor-relative, radians counter-clockwise from the
+/// node's heading).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum ProfileShape {
+    /// `n_bins` equal bins over the full circle, bin 0 at the heading (audio beams).
+    FullCircle {
+        /// Number of beams.
+        n_bins: usize,
+    },
+    /// Bin i at `start_rad + i·step_rad`, zero outside (a camera's field of view).
+    Sector {
+        /// Angle of bin 0's centre.
+        start_rad: f64,
+        /// Angle between bins.
+        step_rad: f64,
+        /// Number of bins.
+        n_bins: usize,
+    },
+}
+
+impl ProfileShape {
+    /// Number of bins a report must carry.
+    pub fn n_bins(&self) -> usize {
+        match *self {
+            Self::FullCircle { n_bins } | Self::Sector { n_bins, .. } => n_bins,
+        }
+    }
+}
+
+/// A sensor node as registered at the fusion node.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensorNode {
+    /// A name for reports and errors.
+    pub name: String,
+    /// Audio or video.
+    pub kind: SensorKind,
+    /// The pose the fusion node believes (calibrated; may differ from the truth).
+    pub pose: SensorPose,
+    /// Layout of the node's profile.
+    pub shape: ProfileShape,
+    /// Offset of the node's clock: its time stamps read fusion time + `clock_offset_s`, so
+    /// the fusion node subtracts it (0 for a synchronised node).
+    pub clock_offset_s: f64,
+    /// Fusion weight w_s ≥ 0 (a multiplier in the weighted sum, an exponent in the product).
+    pub weight: f64,
+}
+
+impl SensorNode {
+    /// An audio node with `n_beams` beams (bin 0 at the heading), synchronised, weight 1.
+    pub fn audio(name: impl Into<String>, pose: SensorPose, n_beams: usize) -> Self {
+        Self {
+            name: name.into(),
+            kind: SensorKind::Audio,
+            pose,
+            shape: ProfileShape::FullCircle { n_bins: n_beams },
+            clock_offset_s: 0.0,
+            weight: 1.0,
+        }
+    }
+
+    /// A video node whose profile layout is `profiler`'s and whose believed pose is `pose`
+    /// (the camera's own pose when it is calibrated exactly), synchronised, weight 1.
+    pub fn video(
+        name: impl Into<String>,
+        pose: SensorPose,
+        profiler: &AngleProfiler,
+        n_angles: usize,
+    ) -> Self {
+        let start_rad = profiler.bin_angle_rad(0);
+        Self {
+            name: name.into(),
+            kind: SensorKind::Video,
+            pose,
+            shape: ProfileShape::Sector {
+                start_rad,
+                step_rad: profiler.bin_angle_rad(1) - start_rad,
+                n_bins: n_angles,
+            },
+            clock_offset_s: 0.0,
+            weight: 1.0,
+        }
+    }
+
+    /// Checks the numbers: finite pose and offset, weight ≥ 0, at least one bin, a sector
+    /// with a positive step.
+    pub fn check(&self) -> Result<()> {
+        if !(self.pose.position.iter().all(|v| v.is_finite()) && self.pose.heading_rad.is_finite())
+        {
+            return Err(tracker_model::Error::NonFinite {
+                what: "sensor pose",
+            }
+            .into());
+        }
+        if !self.clock_offset_s.is_finite() {
+            return Err(tracker_model::Error::NonFinite {
+                what: "clock_offset_s",
+            }
+            .into());
+        }
+        ensure_non_negative(self.weight, "weight")?;
+        if self.shape.n_bins() == 0 {
+            return Err(invalid(
+                "n_bins",
+                format!("sensor {:?} has a profile of 0 bins", self.name),
+            ));
+        }
+        if let ProfileShape::Sector {
+            start_rad,
+            step_rad,
+            ..
+        } = self.shape
+        {
+            tracker_model::ensure_positive(step_rad, "step_rad")?;
+            if !start_rad.is_finite() {
+                return Err(tracker_model::Error::NonFinite { what: "start_rad" }.into());
+            }
+        }
+        Ok(())
+    }
+
+    /// The report's values as a bearing profile at this node's believed pose.
+    pub fn profile(&self, values: Vec<f64>) -> Result<BearingProfile> {
+        Ok(match self.shape {
+            ProfileShape::FullCircle { .. } => BearingProfile::full_circle(self.pose, values)?,
+            ProfileShape::Sector {
+                start_rad,
+                step_rad,
+                ..
+            } => BearingProfile::sector(self.pose, start_rad, step_rad, values)?,
+        })
+    }
+
+    /// Fusion time of a time stamp of this node's clock.
+    pub fn fusion_time_s(&self, local_time_s: f64) -> f64 {
+        local_time_s - self.clock_offset_s
+    }
+}
+
+/// One measurement from a node: its profile values at a time stamp of its own clock.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Report {
+    /// Index of the node in the fusion node's list.
+    pub sensor: usize,
+    /// Time stamp on the node's clock, seconds.
+    pub local_time_s: f64,
+    /// The profile values (beam energies, pixel counts), one per bin.
+    pub values: Vec<f64>,
+}
+
+impl Report {
+    /// A report from a beamform: its time stamp (which the caller puts on the node's clock)
+    /// and its energies scaled as `scaling` says (minimum-subtracted is the usual choice: a
+    /// small array's floor carries no direction).
+    pub fn from_beamform(sensor: usize, beamform: &Beamform, scaling: EnergyScaling) -> Self {
+        let min = beamform
+            .energies
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
+        let values = match scaling {
+            EnergyScaling::Raw => beamform.energies.clone(),
+            EnergyScaling::MinSubtracted => beamform.energies.iter().map(|e| e - min).collect(),
+        };
+        Self {
+            sensor,
+            local_time_s: beamform.time_s,
+            values,
+        }
+    }
+
+    /// Checks the time stamp and values (finite, values ≥ 0).
+    pub(crate) fn check(&self) -> Result<()> {
+        if !self.local_time_s.is_finite() {
+            return Err(Error::BadReport {
+                sensor: self.sensor,
+                index: usize::MAX,
+                value: self.local_time_s,
+            });
+        }
+        if let Some((index, &value)) = self
+            .values
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
+        {
+            return Err(Error::BadReport {
+                sensor: self.sensor,
+                index,
+                value,
+            });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,507 @@
+//! Unit tests: expected values come from closed forms (line intersections, Gaussian moments)
+//! or from hand-built buffers, never from the code under test.
+
+use nalgebra::Matrix2;
+use tracker_model::{
+    ConstantVelocity2, LikelihoodGrid, Region2, SensorPose, TrackSet, Vec2, wrap_angle_rad,
+};
+
+use crate::*;
+
+const DEG: f64 = std::f64::consts::PI / 180.0;
+
+fn pose(x: f64, y: f64, heading_deg: f64) -> SensorPose {
+    SensorPose {
+        position: Vec2::new(x, y),
+        heading_rad: heading_deg * DEG,
+    }
+}
+
+/// Values of a Gaussian bump of width `sigma_rad` at world bearing `bearing_rad`, for `node`'s
+/// layout.
+fn bump(node: &SensorNode, bearing_rad: f64, sigma_rad: f64) -> Vec<f64> {
+    let n = node.shape.n_bins();
+    (0..n)
+        .map(|i| {
+            let rel = match node.shape {
+                ProfileShape::FullCircle { n_bins } => {
+                    i as f64 * std::f64::consts::TAU / n_bins as f64
+                }
+                ProfileShape::Sector {
+                    start_rad,
+                    step_rad,
+                    ..
+                } => start_rad + i as f64 * step_rad,
+            };
+            let off = wrap_angle_rad(node.pose.heading_rad + rel - bearing_rad);
+            (-0.5 * (off / sigma_rad).powi(2)).exp()
+        })
+        .collect()
+}
+
+fn bearing_to(node: &SensorNode, target: Vec2) -> f64 {
+    let d = target - node.pose.position;
+    d.y.atan2(d.x)
+}
+
+fn region() -> Region2 {
+    Region2::new(Vec2::new(0.0, 0.0), Vec2::new(35.0, 20.0)).expect("valid region")
+}
+
+fn fusion_config(rule: FusionRule) -> FusionConfig {
+    FusionConfig {
+        region: region(),
+        cell_size_m: 0.5,
+        max_range_m: None,
+        min_range_m: 0.5,
+        rule,
+        modalities: Modalities::Both,
+        peaks: PeakExtraction::default(),
+    }
+}
+
+fn scheduler() -> SchedulerConfig {
+    SchedulerConfig {
+        rate_hz: 10.0,
+        start_s: 0.0,
+        staleness_s: 0.06,
+        buffer_capacity: 8,
+    }
+}
+
+fn report(sensor: usize, t: f64, values: Vec<f64>) -> Report {
+    Report {
+        sensor,
+        local_time_s: t,
+        values,
+    }
+}
+
+// ---------------------------------------------------------------- buffers and scheduler
+
+#[test]
+fn buffer_sorts_out_of_order_arrivals_and_drops_the_oldest() {
+    let mut b = SensorBuffer::new(3).expect("capacity 3");
+    assert_eq!(b.insert(0.3, vec![3.0]), Arrival::Stored);
+    assert_eq!(b.insert(0.1, vec![1.0]), Arrival::Stored);
+    assert_eq!(b.insert(0.2, vec![2.0]), Arrival::Stored);
+    let times: Vec<f64> = b.entries().map(|e| e.time_s).collect();
+    assert_eq!(times, vec![0.1, 0.2, 0.3]);
+    // Full: a newer late report goes to its place and the oldest leaves.
+    assert_eq!(b.insert(0.25, vec![2.5]), Arrival::StoredDroppingOldest);
+    let times: Vec<f64> = b.entries().map(|e| e.time_s).collect();
+    assert_eq!(times, vec![0.2, 0.25, 0.3]);
+    // Older than everything in a full buffer: dropped.
+    assert_eq!(b.insert(0.05, vec![0.5]), Arrival::DroppedTooOld);
+    // Same time stamp: replaced.
+    assert_eq!(b.insert(0.25, vec![9.0]), Arrival::Replaced);
+    assert_eq!(b.nearest(0.26, 0.1).map(|e| e.values[0]), Some(9.0));
+    // Nearest on either side; a tie goes to the later report.
+    assert_eq!(b.nearest(0.21, 1.0).map(|e| e.time_s), Some(0.2));
+    assert_eq!(b.nearest(0.29, 1.0).map(|e| e.time_s), Some(0.3));
+    assert_eq!(b.nearest(0.275, 1.0).map(|e| e.time_s), Some(0.3));
+    assert!(SensorBuffer::new(0).is_err());
+}
+
+#[test]
+fn scheduler_leaves_out_a_sensor_with_nothing_recent_enough() {
+    let sensors = vec![
+        SensorNode::audio("a", pose(0.0, 0.0, 0.0), 36),
+        SensorNode::audio("b", pose(35.0, 0.0, 0.0), 36),
+    ];
+    let mut node = FusionNode::new(sensors, scheduler()).expect("valid node");
+    node.receive(report(0, 0.98, vec![1.0; 36])).expect("ok");
+    // Sensor 1's last report is 0.1 s before tick 10 (t = 1.0): staler than 0.06 s.
+    node.receive(report(1, 0.9, vec![1.0; 36])).expect("ok");
+    let snap = node.snapshot(10);
+    assert!((snap.time_s - 1.0).abs() < 1e-12);
+    let used: Vec<usize> = snap.selected.iter().map(|s| s.sensor).collect();
+    assert_eq!(used, vec![0]);
+    // At tick 9 (t = 0.9) both are within the limit? Sensor 0's 0.98 is 0.08 away: left out.
+    let used: Vec<usize> = node.snapshot(9).selected.iter().map(|s| s.sensor).collect();
+    assert_eq!(used, vec![1]);
+    // Left out means absent from the fusion, not a zero grid: the fused grid equals sensor
+    // 0's grid alone, which a zero grid would have vetoed under the plain product.
+    let config = fusion_config(FusionRule::Product { floor: 0.0 });
+    let fused = fuse_snapshot(node.sensors(), &node.snapshot(10), &config).expect("fuses");
+    assert_eq!(fused.used, vec![0]);
+    assert!(fused.grid.values().iter().any(|v| *v > 0.0));
+}
+
+#[test]
+fn scheduler_picks_the_nearest_report_whatever_the_arrival_order() {
+    let sensors = vec![SensorNode::audio("a", pose(0.0, 0.0, 0.0), 4)];
+    let mut node = FusionNode::new(sensors, scheduler()).expect("valid node");
+    for (t, v) in [(0.31, 3.0), (0.09, 1.0), (0.22, 2.0), (0.12, 1.5)] {
+        node.receive(report(0, t, vec![v; 4])).expect("ok");
+    }
+    let pick = |k| node.snapshot(k).selected.first().map(|s| s.values[0]);
+    assert_eq!(pick(1), Some(1.0)); // 0.1: 0.09 beats 0.12
+    assert_eq!(pick(2), Some(2.0)); // 0.2: 0.22
+    assert_eq!(pick(3), Some(3.0)); // 0.3: 0.31
+    assert_eq!(pick(5), None); // 0.5: nothing within 0.06 s
+}
+
+#[test]
+fn clock_offsets_are_removed() {
+    let mut a = SensorNode::audio("a", pose(0.0, 0.0, 0.0), 4);
+    a.clock_offset_s = 100.0; // its clock reads fusion time + 100 s
+    let mut b = SensorNode::audio("b", pose(1.0, 0.0, 0.0), 4);
+    b.clock_offset_s = -0.5;
+    let mut node = FusionNode::new(vec![a, b], scheduler()).expect("valid node");
+    node.receive(report(0, 100.2, vec![1.0; 4])).expect("ok");
+    node.receive(report(1, -0.3, vec![1.0; 4])).expect("ok");
+    let snap = node.snapshot(2); // t = 0.2
+    let times: Vec<(usize, f64)> = snap.selected.iter().map(|s| (s.sensor, s.time_s)).collect();
+    assert_eq!(times.len(), 2);
+    assert!(
+        times.iter().all(|(_, t)| (t - 0.2).abs() < 1e-9),
+        "{times:?}"
+    );
+    assert!(node.snapshot(1002).selected.is_empty());
+}
+
+#[test]
+fn bad_reports_are_errors() {
+    let sensors = vec![SensorNode::audio("a", pose(0.0, 0.0, 0.0), 4)];
+    let mut node = FusionNode::new(sensors, scheduler()).expect("valid node");
+    assert!(matches!(
+        node.receive(report(3, 0.0, vec![1.0; 4])),
+        Err(Error::UnknownSensor { sensor: 3, .. })
+    ));
+    assert!(matches!(
+        node.receive(report(0, 0.0, vec![1.0; 5])),
+        Err(Error::ProfileLength { got: 5, .. })
+    ));
+    assert!(matches!(
+        node.receive(report(0, 0.0, vec![1.0, f64::NAN, 1.0, 1.0])),
+        Err(Error::BadReport { index: 1, .. })
+    ));
+    assert!(matches!(
+        node.receive(report(0, f64::INFINITY, vec![1.0; 4])),
+        Err(Error::BadReport { .. })
+    ));
+    assert!(node.receive(report(0, 0.0, vec![-1.0; 4])).is_err());
+    assert!(FusionNode::new(Vec::new(), scheduler()).is_err());
+    let bad = SchedulerConfig {
+        rate_hz: 0.0,
+        ..scheduler()
+    };
+    assert!(bad.check().is_err());
+    assert!(
+        fusion_config(FusionRule::Product { floor: 1.0 })
+            .check()
+            .is_err()
+    );
+    assert!(
+        fusion_config(FusionRule::Product { floor: -0.1 })
+            .check()
+            .is_err()
+    );
+}
+
+// ---------------------------------------------------------------- fusion and peaks
+
+/// Closed-form intersection of the rays from p1 at θ1 and from p2 at θ2.
+fn intersection(p1: Vec2, t1: f64, p2: Vec2, t2: f64) -> Vec2 {
+    let (u1, u2) = (Vec2::new(t1.cos(), t1.sin()), Vec2::new(t2.cos(), t2.sin()));
+    // p1 + a u1 = p2 + b u2 → a = ((p2 − p1) × u2) / (u1 × u2).
+    let cross = |a: Vec2, b: Vec2| a.x * b.y - a.y * b.x;
+    p1 + u1 * (cross(p2 - p1, u2) / cross(u1, u2))
+}
+
+#[test]
+fn two_bearings_fuse_to_their_intersection_under_both_rules() {
+    let s1 = SensorNode::audio("a", pose(2.0, 1.0, 0.0), 360);
+    let s2 = SensorNode::audio("b", pose(33.0, 1.5, 0.0), 360);
+    for (t1, t2) in [(30.0, 150.0), (20.0, 150.0), (35.0, 130.0)] {
+        let (t1, t2) = (t1 * DEG, t2 * DEG);
+        let truth = intersection(s1.pose.position, t1, s2.pose.position, t2);
+        let mut node =
+            FusionNode::new(vec![s1.clone(), s2.clone()], scheduler()).expect("valid node");
+        node.receive(report(0, 0.0, bump(&s1, t1, 2.0 * DEG)))
+            .expect("ok");
+        node.receive(report(1, 0.0, bump(&s2, t2, 2.0 * DEG)))
+            .expect("ok");
+        for rule in [
+            FusionRule::WeightedSum {
+                scaling: SumScaling::Max,
+            },
+            FusionRule::WeightedSum {
+                scaling: SumScaling::Sum,
+            },
+            FusionRule::Product { floor: 0.01 },
+        ] {
+            let mut config = fusion_config(rule);
+            config.peaks.moment_fraction = 0.8;
+            config.peaks.moment_radius_m = 1.0;
+            let fused = fuse_snapshot(node.sensors(), &node.snapshot(0), &config).expect("fuses");
+            let best = fused.peaks.first().expect("a peak");
+            let err = (best.position - truth).norm();
+            assert!(
+                err < 0.25,
+                "{rule:?}: peak {:?} vs intersection {truth:?} ({err} m)",
+                best.position
+            );
+            assert!((fused.grid.values().iter().sum::<f64>() - 1.0).abs() < 1e-9);
+        }
+    }
+}
+
+#[test]
+fn the_floor_keeps_a_sensor_that_misses_from_vetoing_the_target() {
+    let s1 = SensorNode::audio("a", pose(2.0, 1.0, 0.0), 360);
+    let s2 = SensorNode::audio("b", pose(33.0, 1.5, 0.0), 360);
+    let s3 = SensorNode::audio("c", pose(17.0, 19.0, 0.0), 360);
+    let (t1, t2) = (30.0 * DEG, 150.0 * DEG);
+    let truth = intersection(s1.pose.position, t1, s2.pose.position, t2);
+    let mut node =
+        FusionNode::new(vec![s1.clone(), s2.clone(), s3.clone()], scheduler()).expect("valid node");
+    node.receive(report(0, 0.0, bump(&s1, t1, 2.0 * DEG)))
+        .expect("ok");
+    node.receive(report(1, 0.0, bump(&s2, t2, 2.0 * DEG)))
+        .expect("ok");
+    // Sensor c points 60° away from the target and is exactly zero there (a sector of 20
+    // bins covering ±10° about its wrong bearing, zero elsewhere).
+    let wrong = bearing_to(&s3, truth) + 60.0 * DEG;
+    let values: Vec<f64> = bump(&s3, wrong, 2.0 * DEG)
+        .into_iter()
+        .map(|v| if v > 1e-3 { v } else { 0.0 })
+        .collect();
+    node.receive(report(2, 0.0, values)).expect("ok");
+    let peak_error = |floor: f64| {
+        let config = fusion_config(FusionRule::Product { floor });
+        let fused = fuse_snapshot(node.sensors(), &node.snapshot(0), &config).expect("fuses");
+        let cell = fused.grid.cell_of(&truth).expect("inside");
+        let at_truth = fused.grid.value(cell.0, cell.1);
+        let best = fused.peaks.first().map(|p| (p.position - truth).norm());
+        (at_truth, best)
+    };
+    // Plain product: sensor c's zero vetoes the target's cell.
+    let (v0, _) = peak_error(0.0);
+    assert!(v0 < 1e-12);
+    // With a floor of 0.2 the target survives as the strongest peak: there the floored
+    // product is 1 · 1 · 0.2, the best a cell on c's line alone can do is 0.2 · 0.2 · 1.
+    let (v, err) = peak_error(0.2);
+    assert!(v > 0.0);
+    assert!(err.is_some_and(|e| e < 0.5), "{err:?}");
+}
+
+#[test]
+fn peak_covariance_is_the_shape_second_moment() {
+    // A Gaussian blob with known covariance, sampled on 0.1 m cells: the discrete second
+    // moment equals Σ (the sampling error is exponentially small for σ ≫ s), and the
+    // extraction adds the cell's s²/12.
+    let region = Region2::new(Vec2::new(0.0, 0.0), Vec2::new(20.0, 20.0)).expect("region");
+    let s = 0.1;
+    let (a, b, rho) = (1.2f64, 0.6f64, 0.5f64);
+    let sigma = Matrix2::new(a * a, rho * a * b, rho * a * b, b * b);
+    let inv = sigma.try_inverse().expect("invertible");
+    let centre = Vec2::new(10.0, 10.0);
+    let grid = LikelihoodGrid::from_fn(region, s, |q| {
+        let d = q - centre;
+        (-0.5 * (d.transpose() * inv * d)[(0, 0)]).exp()
+    })
+    .expect("grid");
+    let config = PeakExtraction {
+        relative_threshold: 0.5,
+        min_contrast: 0.0,
+        suppression_radius_m: 3.0,
+        moment_radius_m: 8.0,
+        moment_fraction: 0.0,
+        max_peaks: 4,
+        border_cells: 0,
+    };
+    let peaks = extract_peaks(&grid, &config).expect("peaks");
+    assert_eq!(peaks.len(), 1);
+    let expected = sigma + Matrix2::identity() * s * s / 12.0;
+    let diff = (peaks[0].covariance - expected).abs().max();
+    assert!(diff < 1e-3, "{} vs {expected}", peaks[0].covariance);
+    assert!((peaks[0].position - centre).norm() < 1e-6);
+    // min_contrast: a flat grid yields no measurement.
+    let flat = LikelihoodGrid::from_fn(region, 1.0, |q| 1.0 + 1e-3 * (q.x * 7.0).sin())
+        .expect("flat grid");
+    let mut c = config;
+    c.min_contrast = 2.0;
+    assert!(extract_peaks(&flat, &c).expect("ok").is_empty());
+}
+
+// ---------------------------------------------------------------- tracking
+
+/// The Table 1 layout in miniature: six full-circle (audio-like) nodes and three sector
+/// (camera-like) nodes either side of a road along y = 10.
+fn road_sensors() -> Vec<SensorNode> {
+    let mut sensors = Vec::new();
+    for (i, (x, y)) in [
+        (4.0, 3.0),
+        (17.5, 3.0),
+        (31.0, 3.0),
+        (4.0, 17.0),
+        (17.5, 17.0),
+        (31.0, 17.0),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        sensors.push(SensorNode::audio(format!("a{i}"), pose(x, y, 0.0), 36));
+    }
+    for (i, (x, y, h)) in [(5.0, 0.5, 45.0), (30.0, 0.5, 135.0), (17.5, 19.5, -90.0)]
+        .into_iter()
+        .enumerate()
+    {
+        sensors.push(SensorNode {
+            name: format!("v{i}"),
+            kind: SensorKind::Video,
+            pose: pose(x, y, h),
+            shape: ProfileShape::Sector {
+                start_rad: -40.0 * DEG,
+                step_rad: 0.5 * DEG,
+                n_bins: 160,
+            },
+            clock_offset_s: 0.0,
+            weight: 1.0,
+        });
+    }
+    sensors
+}
+
+fn vehicle(t: f64) -> Vec2 {
+    Vec2::new(-3.0 + 11.0 * t, 10.0)
+}
+
+/// Noise-free reports of one vehicle, every 0.05 s from every node.
+fn noise_free_reports(sensors: &[SensorNode], duration_s: f64) -> Vec<Report> {
+    let mut reports = Vec::new();
+    for (i, s) in sensors.iter().enumerate() {
+        let width = match s.kind {
+            SensorKind::Audio => 12.0 * DEG,
+            SensorKind::Video => 1.5 * DEG,
+        };
+        for k in 0..=(duration_s / 0.05).round() as u32 {
+            let t = 0.05 * f64::from(k);
+            let values = bump(s, bearing_to(s, vehicle(t)), width);
+            reports.push(report(i, t, values));
+        }
+    }
+    reports
+}
+
+fn av_config(rule: FusionRule) -> AvConfig {
+    AvConfig {
+        scheduler: SchedulerConfig {
+            rate_hz: 10.0,
+            start_s: 0.0,
+            staleness_s: 0.05,
+            buffer_capacity: 16,
+        },
+        fusion: fusion_config(rule),
+        tracker: TrackerConfig {
+            mcmcda: mcmcda::McmcdaConfig {
+                volume: 700.0,
+                births_per_scan: 0.05,
+                clutter_per_scan: 0.5,
+                p_disappear: 0.01,
+                p_detect: 0.9,
+                motion: ConstantVelocity2::mcmcda(0.1, 1.0).expect("valid"),
+                measurement_noise: Matrix2::identity() * 0.1,
+                max_speed: 20.0,
+                ..mcmcda::McmcdaConfig::default()
+            },
+            online: mcmcda::OnlineConfig {
+                window: 8,
+                samples_per_scan: 300,
+                ..mcmcda::OnlineConfig::default()
+            },
+            seed: 11,
+        },
+    }
+}
+
+/// Mean distance between the track and the vehicle over the ticks the vehicle is inside the
+/// region (where the truth exists).
+fn mean_track_error(tracks: &TrackSet, clock: &tracker_model::FrameClock) -> f64 {
+    let t = &tracks.tracks()[0];
+    let errors: Vec<f64> = t
+        .points()
+        .iter()
+        .filter_map(|p| {
+            let truth = vehicle(clock.time_s(p.frame));
+            region()
+                .contains(&truth)
+                .then(|| (p.location.position() - truth).norm())
+        })
+        .collect();
+    errors.iter().sum::<f64>() / errors.len().max(1) as f64
+}
+
+#[test]
+fn a_noise_free_pass_is_tracked_within_one_cell() {
+    let sensors = road_sensors();
+    let reports = noise_free_reports(&sensors, 4.0);
+    for rule in [
+        FusionRule::Product { floor: 0.05 },
+        FusionRule::WeightedSum {
+            scaling: SumScaling::Max,
+        },
+    ] {
+        let mut config = av_config(rule);
+        if let FusionRule::WeightedSum { .. } = rule {
+            // The sum keeps every sensor's ridge: only the top of the crossing is a target.
+            config.fusion.peaks.relative_threshold = 0.85;
+        }
+        let run = track_reports(sensors.clone(), reports.clone(), 40, &config).expect("runs");
+        assert_eq!(run.tracks.len(), 1, "{rule:?}: {:?}", run.tracks.len());
+        let err = mean_track_error(&run.tracks, &run.clock);
+        assert!(
+            err < 0.5,
+            "{rule:?}: mean error {err} m is not below one cell"
+        );
+        // The track covers the pass inside the region (x from 0 to 35: t ≈ 0.27–3.45 s).
+        assert!(run.tracks.tracks()[0].len() >= 25);
+    }
+}
+
+#[test]
+fn output_is_identical_with_one_and_two_threads() {
+    let sensors = road_sensors();
+    let reports = noise_free_reports(&sensors, 3.0);
+    let run_with = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        pool.install(|| {
+            track_reports(
+                sensors.clone(),
+                reports.clone(),
+                30,
+                &av_config(FusionRule::Product { floor: 0.05 }),
+            )
+            .expect("runs")
+        })
+    };
+    let (one, two) = (run_with(1), run_with(2));
+    assert_eq!(one.tracks, two.tracks);
+    assert_eq!(one.scans, two.scans);
+}
+
+#[test]
+fn the_tracker_period_must_match_the_scheduler() {
+    let mut config = av_config(FusionRule::WeightedSum {
+        scaling: SumScaling::Max,
+    });
+    config.scheduler.rate_hz = 5.0;
+    assert!(matches!(
+        AvPipeline::new(road_sensors(), &config),
+        Err(Error::PeriodMismatch { .. })
+    ));
+    let mut p = AvPipeline::new(
+        road_sensors(),
+        &av_config(FusionRule::WeightedSum {
+            scaling: SumScaling::Max,
+        }),
+    )
+    .expect("valid pipeline");
+    p.process(3).expect("ok");
+    assert!(matches!(p.process(2), Err(Error::TickOutOfOrder { .. })));
+}
