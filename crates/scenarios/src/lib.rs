@@ -318,6 +318,7 @@ const PIPELINES: &[(&str, RunFn)] = &[
     ("mcmcda-sweep", run_typed::<pipelines::mcmcda::Sweep>),
     ("mot-eval", run_typed::<pipelines::mot_eval::MotEval>),
     ("mot-track", run_typed::<pipelines::mot_track::MotTrack>),
+    ("phd-images", run_typed::<pipelines::phd_images::PhdImages>),
     (
         "phd-pedestrians",
         run_typed::<pipelines::phd::PhdPedestrians>,

@@ -14,7 +14,9 @@
 //!   (writable as [`tracker_model::MotRow`]); [`DetectionFilter`]: the paper's persistent
 //!   background suppression and spike removal on the detection function;
 //! * [`PinholeCamera`] and [`AngleProfiler`]: pixels to bearings, masks to profiles;
-//! * [`render`]: a seeded scene renderer with truth masks, shadows and boxes, for tests.
+//! * [`render`]: a seeded scene renderer with truth masks, shadows and boxes, for tests;
+//! * [`sprites`]: people-like textured sprites walking in given boxes over clutter, for
+//!   image-based local detectors.
 //!
 //! Invariants: no global state, no ambient randomness (the renderer takes a generator); file
 //! I/O only in [`io`]; every malformed input is an [`Error`], never a panic.
@@ -43,6 +45,7 @@ pub mod io;
 pub mod mog;
 pub mod post;
 pub mod render;
+pub mod sprites;
 
 #[cfg(test)]
 mod tests;
@@ -56,3 +59,4 @@ pub use mog::{
 };
 pub use post::{Blob, Cleaned, DetectionFilter, DetectionFilterConfig, PostConfig, clean};
 pub use render::{ObjectKind, RenderedFrame, Scene, SceneConfig, SceneObject};
+pub use sprites::{Appearance, SpriteConfig, SpriteRenderer};

@@ -10,5 +10,6 @@ pub mod mcmcda;
 pub mod mot_eval;
 pub mod mot_track;
 pub mod phd;
+pub mod phd_images;
 pub mod simulator;
 pub mod video;
