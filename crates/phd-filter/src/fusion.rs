@@ -152,7 +152,15 @@ pub fn fuse(
     out
 }
 
-/// Eq. 9 (`confirmed`) or eq. 10: the next confidence of a local detector.
+/// The highest confidence a local detector keeps: 1 − 2⁻⁵². In exact arithmetic eqs. 9-10
+/// never reach 1, but in f64 about twenty confirmations in a row round the posterior to
+/// exactly 1, where eq. 10 can no longer lower it and the detector would never be removed.
+/// Capping one ulp-pair below 1 changes nothing before that point, and after it a run of
+/// misses (15 at the paper's p_D = 0.95, p_FA = 0.3) removes the detector again.
+pub const MAX_CONFIDENCE: f64 = 1.0 - f64::EPSILON;
+
+/// Eq. 9 (`confirmed`) or eq. 10: the next confidence of a local detector, capped at
+/// [`MAX_CONFIDENCE`].
 pub fn updated_confidence(previous: f64, confirmed: bool, config: &FusionConfig) -> f64 {
     let (p_d, p_fa) = (config.p_detect, config.p_false_alarm);
     let (hit, miss) = if confirmed {
@@ -160,7 +168,7 @@ pub fn updated_confidence(previous: f64, confirmed: bool, config: &FusionConfig)
     } else {
         (1.0 - p_d, 1.0 - p_fa)
     };
-    hit * previous / (hit * previous + miss * (1.0 - previous))
+    (hit * previous / (hit * previous + miss * (1.0 - previous))).min(MAX_CONFIDENCE)
 }
 
 /// A local detector attached to one track.

@@ -58,7 +58,9 @@ mod tests;
 
 pub use config::{BoxMeasurement, BoxState, Motion, PhdConfig, measurement_from_box, state_box};
 pub use error::{Error, Result};
-pub use fusion::{DetectorBank, FusionConfig, ManagedDetector, Source, fuse, updated_confidence};
+pub use fusion::{
+    DetectorBank, FusionConfig, MAX_CONFIDENCE, ManagedDetector, Source, fuse, updated_confidence,
+};
 pub use gm::{Component, GmConfig, GmPhd};
 pub use smc::{Estimate, Particle, PhdStep, SmcPhd};
 pub use tracker::{FrameOutput, NoLocalDetectors, PhdFilter, PhdTracker};

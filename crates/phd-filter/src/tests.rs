@@ -6,7 +6,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use tracker_model::{BoundingBox, Frame, LocalDetector};
 
-use crate::fusion::{DetectorBank, FusionConfig, Source, fuse, updated_confidence};
+use crate::fusion::{DetectorBank, FusionConfig, MAX_CONFIDENCE, Source, fuse, updated_confidence};
 use crate::{GmConfig, GmPhd, PhdConfig, SmcPhd};
 
 fn bx(left: f64, top: f64, width: f64, height: f64) -> BoundingBox {
@@ -167,6 +167,21 @@ fn confidence_follows_eqs_9_and_10() {
         ..config
     };
     assert!((updated_confidence(0.5, false, &seed) - 0.025 / 0.375).abs() < 1e-15);
+    // A long-confirmed detector can still be removed: uncapped, f64 rounds the posterior to
+    // exactly 1 after a few dozen confirmations and eq. 10 then keeps it at 1 for ever.
+    let mut p = 0.5;
+    for _ in 0..100 {
+        p = updated_confidence(p, true, &seed);
+    }
+    assert_eq!(p, MAX_CONFIDENCE);
+    // From odds 2⁵² each miss multiplies the odds by 0.05 / 0.7 = 1/14: 14¹⁴ ≈ 1.1e16 < 9·2⁵²
+    // ≈ 4.1e16 < 14¹⁵ ≈ 1.6e17, so the 15th miss is the first to reach P ≤ 0.1.
+    let mut misses = 0;
+    while p > seed.removal_confidence {
+        p = updated_confidence(p, false, &seed);
+        misses += 1;
+    }
+    assert_eq!(misses, 15);
 }
 
 /// A detector that reports a fixed box.
