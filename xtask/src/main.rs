@@ -81,9 +81,10 @@ enum Command {
     /// Track MOTChallenge detections and write MOTChallenge tracks. Without --config each
     /// tracker's model is scaled to the detections' median box size.
     Track {
-        /// mcmcda: online sliding-window MCMCDA on the box centres; gnn: global nearest
-        /// neighbour with M-of-N confirmation on the box centres (both output smoothed centres
-        /// with each track's mean detection size); phd: SMC-PHD on the boxes themselves.
+        /// mcmcda: offline (batch) MCMCDA on the box centres; mcmcda-online: the sliding-window
+        /// tracker, output frame by frame; gnn: global nearest neighbour with M-of-N
+        /// confirmation on the box centres (all three output boxes fitted to each track's
+        /// detections); phd: SMC-PHD on the boxes themselves.
         #[arg(long, required_unless_present = "print_config")]
         tracker: Option<scenarios::track::Tracker>,
         /// Detections (frame,id,left,top,width,height,conf,...).
@@ -107,6 +108,25 @@ enum Command {
         /// --input's boxes when given, with --config applied.
         #[arg(long)]
         print_config: bool,
+        /// With --tracker mcmcda: run the online sliding-window tracker (mcmcda-online).
+        #[arg(long)]
+        online: bool,
+    },
+    /// Write a realistic pedestrian sequence (scenarios::walkers): OUT-det.txt (detections
+    /// with scores) and OUT-gt.txt (ground truth), MOTChallenge text.
+    Walkers {
+        /// Seed of the generator.
+        #[arg(long)]
+        seed: u64,
+        /// Frames per second.
+        #[arg(long, default_value_t = 25.0)]
+        fps: f64,
+        /// Length in seconds.
+        #[arg(long, default_value_t = 16.0)]
+        seconds: f64,
+        /// Path prefix of the two files.
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Score a tracker's MOTChallenge output against MOTChallenge ground truth.
     Eval {
@@ -161,14 +181,26 @@ fn main() -> ExitCode {
             config,
             seed,
             print_config,
+            online,
         } => track::run(&track::Request {
-            tracker,
+            tracker: match (tracker, online) {
+                (Some(scenarios::track::Tracker::Mcmcda), true) => {
+                    Some(scenarios::track::Tracker::McmcdaOnline)
+                }
+                (t, _) => t,
+            },
             input: input.as_deref(),
             out: out.as_deref(),
             config: config.as_deref(),
             seed,
             print_config,
         }),
+        Command::Walkers {
+            seed,
+            fps,
+            seconds,
+            out,
+        } => track::write_walkers(seed, fps, seconds, &out),
         Command::Eval {
             gt,
             pred,

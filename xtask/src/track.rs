@@ -67,8 +67,11 @@ pub fn run(req: &Request<'_>) -> Outcome {
         bail!("track needs --tracker, --input and --out (or --print-config)");
     };
     let rows = read_input(input)?;
+    let start = std::time::Instant::now();
     let set = track_detections(tracker, &rows, &settings, req.seed)?;
-    if let Some(warning) = empty_output_warning(tracker, &rows, &settings.resolve(&rows)?, &set) {
+    let elapsed = start.elapsed().as_secs_f64();
+    let effective = settings.resolve(&rows)?;
+    if let Some(warning) = empty_output_warning(tracker, &rows, &effective, &set) {
         eprintln!("warning: {warning}");
     }
     let mut boxes = set.to_mot_rows(0.0);
@@ -86,11 +89,68 @@ pub fn run(req: &Request<'_>) -> Outcome {
     }
     fs::write(out, format_mot(&boxes))
         .with_context(|| format!("cannot write {}", out.display()))?;
+    let frames: std::collections::BTreeSet<u32> = rows.iter().map(|r| r.frame).collect();
     println!(
-        "{} tracks ({} boxes) from {} detections written to {}",
+        "{tracker}: {} tracks ({} boxes) from {} detections in {} frames written to {}; {}; \
+         {:.3} ms per frame",
         set.len(),
         set.n_points(),
         rows.len(),
+        frames.len(),
+        out.display(),
+        fitted_summary(tracker, &effective),
+        1e3 * elapsed / frames.len().max(1) as f64
+    );
+    Ok(true)
+}
+
+/// The fitted parameters the tracker used, on one line.
+fn fitted_summary(tracker: Tracker, c: &scenarios::track::EffectiveConfig) -> String {
+    let m = &c.model;
+    let q = match m.motion.noise() {
+        tracker_model::CvNoise::Discrete {
+            acceleration_covariance,
+        } => acceleration_covariance[(0, 0)],
+        tracker_model::CvNoise::WhiteAcceleration { q } => q,
+    };
+    match tracker {
+        Tracker::Phd => format!(
+            "p_d {:.3}, clutter {:.3}/frame, births {:.4}/frame",
+            c.phd.p_detect, c.phd.clutter_rate, c.phd.birth_rate
+        ),
+        _ => format!(
+            "fitted p_d {:.3}, clutter {:.3}/frame, births {:.4}/frame, R diag [{:.2}, {:.2}] px², \
+             q {:.3} px²/frame⁴, v̄ {:.1} px/frame",
+            m.p_detect,
+            m.clutter_per_scan,
+            m.births_per_scan,
+            m.measurement_noise[(0, 0)],
+            m.measurement_noise[(1, 1)],
+            q,
+            m.max_speed
+        ),
+    }
+}
+
+/// `cargo xtask walkers`: writes `OUT-det.txt` and `OUT-gt.txt`.
+#[expect(clippy::print_stdout, reason = "what was written goes to the terminal")]
+pub fn write_walkers(seed: u64, fps: f64, seconds: f64, out: &Path) -> Outcome {
+    let config = scenarios::walkers::WalkersConfig {
+        fps,
+        duration_s: seconds,
+        ..Default::default()
+    };
+    let seq = config.generate_seeded(seed)?;
+    for (suffix, rows) in [("det", &seq.detections), ("gt", &seq.gt)] {
+        let path = format!("{}-{suffix}.txt", out.display());
+        fs::write(&path, format_mot(rows)).with_context(|| format!("cannot write {path}"))?;
+    }
+    println!(
+        "{} frames, {} truth boxes, {} detections: {}-det.txt, {}-gt.txt",
+        seq.n_frames,
+        seq.gt.len(),
+        seq.detections.len(),
+        out.display(),
         out.display()
     );
     Ok(true)

@@ -318,6 +318,10 @@ const PIPELINES: &[(&str, RunFn)] = &[
     ("mcmcda-sweep", run_typed::<pipelines::mcmcda::Sweep>),
     ("mot-eval", run_typed::<pipelines::mot_eval::MotEval>),
     ("mot-track", run_typed::<pipelines::mot_track::MotTrack>),
+    (
+        "mot-realistic",
+        run_typed::<pipelines::mot_realistic::MotRealistic>,
+    ),
     ("phd-images", run_typed::<pipelines::phd_images::PhdImages>),
     (
         "phd-pedestrians",
@@ -326,6 +330,10 @@ const PIPELINES: &[(&str, RunFn)] = &[
     (
         "simulator-poisson",
         run_typed::<pipelines::simulator::SimulatorPoisson>,
+    ),
+    (
+        "camnet-localisation",
+        run_typed::<pipelines::camnet::CamnetLocalisation>,
     ),
     ("video-mog", run_typed::<pipelines::video::VideoMog>),
 ];

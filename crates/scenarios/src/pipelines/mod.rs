@@ -2,12 +2,14 @@
 
 pub mod audio;
 pub mod av_fusion;
+pub mod camnet;
 pub mod dmtim;
 pub mod gdt;
 pub mod hmm;
 pub mod kalman;
 pub mod mcmcda;
 pub mod mot_eval;
+pub mod mot_realistic;
 pub mod mot_track;
 pub mod phd;
 pub mod phd_images;

@@ -1,0 +1,73 @@
+//! # camnet
+//!
+//! Camera-network localisation from object image tracks (Meingast, Oh & Sastry, ICCV 2007;
+//! reconstruction in `algorithms.md` §6, choices in `docs/camnet.md`). Each camera tracks
+//! moving objects in its own image with MCMCDA; the image tracks are the features matched
+//! between cameras; the matched, time-aligned points give each pair's relative pose; a
+//! spanning tree of the view graph and scales from points seen by three cameras put every
+//! camera in camera 0's frame, up to one global scale.
+//!
+//! * [`image_tracks`] / [`image_tracks_from_mot`]: per-camera MCMCDA on blob centroids;
+//! * two views: [`eight_point`] (normalised, projected onto essential matrices),
+//!   [`sampson_distance`], [`ransac_essential`], [`decompose_essential`] and [`select_pose`]
+//!   (cheirality), [`refine_two_view`] (Levenberg-Marquardt on reprojection error), all in
+//!   [`estimate_relative_pose`];
+//! * [`match_tracks`]: which tracks of two cameras are the same objects;
+//! * [`localise`]: the network;
+//! * [`umeyama`]: similarity alignment, for scoring against the truth.
+//!
+//! Two views of 30 random points, no noise:
+//!
+//! ```
+//! use camnet::{EssentialConfig, Pose, estimate_relative_pose, project};
+//! use nalgebra::{Rotation3, Vector3};
+//! use rand::{RngExt, SeedableRng};
+//! use rand_chacha::ChaCha8Rng;
+//!
+//! let mut rng = ChaCha8Rng::seed_from_u64(1);
+//! let truth = Pose {
+//!     rotation: Rotation3::from_euler_angles(0.1, -0.3, 0.05),
+//!     translation: Vector3::new(1.0, 0.2, -0.1).normalize(),
+//! };
+//! let (mut x1, mut x2) = (Vec::new(), Vec::new());
+//! for _ in 0..30 {
+//!     let p = Vector3::new(rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0), rng.random_range(4.0..8.0));
+//!     x1.push(project(&p).unwrap());
+//!     x2.push(project(&truth.apply(&p)).unwrap());
+//! }
+//! let est = estimate_relative_pose(&x1, &x2, &EssentialConfig::default(), &mut rng)?;
+//! assert!(camnet::rotation_error_deg(&est.pose.rotation, &truth.rotation) < 1e-6);
+//! assert!(camnet::angle_between_deg(&est.pose.translation, &truth.translation) < 1e-6);
+//! # Ok::<(), camnet::Error>(())
+//! ```
+
+mod correspondence;
+mod error;
+mod essential;
+mod geometry;
+mod network;
+mod refine;
+mod tracks;
+
+#[cfg(test)]
+mod tests;
+
+pub use correspondence::{
+    CorrespondenceConfig, FeatureTrack, PairMatching, TrackMatch, match_tracks,
+};
+pub use error::{Error, Result};
+pub use essential::{
+    COLLINEAR_RATIO, EssentialConfig, MIN_POINTS, RansacResult, TwoViewEstimate, count_in_front,
+    decompose_essential, eight_point, eight_point_indices, estimate_relative_pose,
+    estimate_relative_pose_from, fit_all_and_refit, polish_essential, project_to_essential,
+    ransac_essential, ransac_essential_from, rotation_only_parallax, sampson_distance, select_pose,
+};
+pub use geometry::{
+    Intrinsics, Pose, Similarity, angle_between_deg, project, rotation_error_deg, skew,
+    triangulate, umeyama,
+};
+pub use network::{CameraTracks, Network, NetworkConfig, PairResult, localise};
+pub use refine::{RefineConfig, Refined, refine_two_view};
+pub use tracks::{
+    Blob, Features, ImageTrack, ImageTrackConfig, image_tracks, image_tracks_from_mot,
+};
