@@ -50,10 +50,6 @@ fn measure(gt: &str, pred: &str) -> (usize, f64) {
 }
 
 #[test]
-#[expect(
-    clippy::print_stderr,
-    reason = "the measured numbers go to docs/reliability.md"
-)]
 fn eval_on_a_million_rows_costs_memory_by_rows_not_by_frame_span() {
     let (n_objects, n_frames) = (10, 100_000);
     let rows = (n_objects * n_frames) as f64;

@@ -109,7 +109,6 @@ pub fn read_mot<R: BufRead>(reader: R) -> Result<MotFile> {
     Ok(file)
 }
 
-
 /// A header names the columns: as many fields as a row, none of them a number.
 fn is_header(text: &str) -> bool {
     let fields: Vec<&str> = text.split(',').collect();

@@ -106,8 +106,16 @@ pub struct Output {
     scores: [Vec<Score>; 4],
     /// First run: truth and the estimates of the global-only and image-fused trackers at the
     /// overlay frame.
-    overlay: Option<(u32, Vec<BoundingBox>, Vec<BoundingBox>, Vec<BoundingBox>)>,
+    overlay: Option<Overlay>,
     paper: Option<Paper>,
+}
+
+/// One frame's boxes: the truth and two trackers' estimates.
+struct Overlay {
+    frame: u32,
+    truth: Vec<BoundingBox>,
+    global: Vec<BoundingBox>,
+    fused: Vec<BoundingBox>,
 }
 
 struct Run {
@@ -302,13 +310,11 @@ impl Pipeline for PhdImages {
                 .map(|o| o.estimates.iter().map(|e| e.bbox).collect())
                 .unwrap_or_default()
         };
-        let overlay = first.scene.by_frame.get(&f).map(|people| {
-            (
-                f,
-                people.iter().map(|(_, b, _)| *b).collect(),
-                estimates(0),
-                estimates(2),
-            )
+        let overlay = first.scene.by_frame.get(&f).map(|people| Overlay {
+            frame: f,
+            truth: people.iter().map(|(_, b, _)| *b).collect(),
+            global: estimates(0),
+            fused: estimates(2),
         });
         Ok(Output {
             title: p.title.clone(),
@@ -409,7 +415,13 @@ impl Pipeline for PhdImages {
             out.recall
         );
         let mut figures = Vec::new();
-        if let Some((f, truth, global, fused)) = &out.overlay {
+        if let Some(Overlay {
+            frame: f,
+            truth,
+            global,
+            fused,
+        }) = &out.overlay
+        {
             let mut series = Vec::new();
             for (label, boxes, style, colour) in [
                 ("people", truth, Style::Line, 7),
