@@ -190,7 +190,7 @@ pub fn fuzz_wav(data: &[u8]) {
 }
 
 /// Fuzz entry: one PNG/PGM/PPM image (sensors-video through `image`). A frame that decodes has
-/// the size it claims and writes back as PNG that decodes to the same pixels.
+/// a pixel buffer of exactly the size it claims.
 pub fn fuzz_image(data: &[u8]) {
     let name = std::path::Path::new("fuzz-input");
     let Ok(frame) = sensors_video::io::decode_image(data, name) else {

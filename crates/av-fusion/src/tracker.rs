@@ -155,7 +155,8 @@ pub fn track_reports(
     let mut keyed: Vec<(f64, Report)> = reports.drain(..).map(|r| (fusion_time(&r), r)).collect();
     keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut pending = keyed.into_iter().peekable();
-    let mut scans = Vec::with_capacity(usize::try_from(n_ticks).unwrap_or(0));
+    // Grown as ticks succeed: a huge `n_ticks` gets `process`'s typed error, not an abort.
+    let mut scans = Vec::with_capacity(usize::try_from(n_ticks).unwrap_or(0).min(1 << 16));
     let staleness = config.scheduler.staleness_s;
     for k in 0..n_ticks {
         let due = config.scheduler.tick_time_s(k) + staleness;

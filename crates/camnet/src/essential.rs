@@ -3,7 +3,7 @@
 //! decomposition with cheirality by triangulated depth, and the zero-baseline check.
 //!
 //! All points are normalised image coordinates (x = K⁻¹ u); E satisfies x₂ᵀ E x₁ = 0 for the
-//! relative pose X₂ = R X₁ + t, E = [t]× R (Hartley & Zisserman §9.6, §11.2).
+//! relative pose X₂ = R X₁ + t, E = \[t\]× R (Hartley & Zisserman §9.6, §11.2).
 
 use nalgebra::{Matrix3, SMatrix, Vector2, Vector3};
 use rand::{Rng, RngExt};
@@ -77,7 +77,7 @@ impl EssentialConfig {
 /// Result of [`estimate_relative_pose`].
 #[derive(Debug, Clone)]
 pub struct TwoViewEstimate {
-    /// E = [t]× R of the final pose, |t| = 1.
+    /// E = \[t\]× R of the final pose, |t| = 1.
     pub essential: Matrix3<f64>,
     /// X₂ = R X₁ + t with |t| = 1.
     pub pose: Pose,

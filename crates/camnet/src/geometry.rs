@@ -114,13 +114,13 @@ impl Pose {
         -(self.rotation.inverse() * self.translation)
     }
 
-    /// The essential matrix [t]× R of this relative pose (x₂ᵀ E x₁ = 0).
+    /// The essential matrix \[t\]× R of this relative pose (x₂ᵀ E x₁ = 0).
     pub fn essential(&self) -> Matrix3<f64> {
         skew(&self.translation) * self.rotation.matrix()
     }
 }
 
-/// [v]×, the cross-product matrix.
+/// \[v\]×, the cross-product matrix.
 pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }

@@ -226,7 +226,8 @@ pub fn localise(cameras: &[CameraTracks], config: &NetworkConfig, seed: u64) -> 
                 })
                 .filter(|r| r.is_finite() && *r > 0.0)
                 .collect();
-            if ratios.len() < config.min_scale_points {
+            // At least one ratio, whatever `min_scale_points` says (0 would mean "any").
+            if ratios.is_empty() || ratios.len() < config.min_scale_points {
                 continue;
             }
             ratios.sort_by(f64::total_cmp);

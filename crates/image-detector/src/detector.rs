@@ -328,9 +328,9 @@ impl ImageDetector {
     /// Searches `image` around `around`: the best window over every scale with its score, or
     /// `None` (untrained, box mostly outside the image, or nothing above the thresholds).
     ///
-    /// Windows are tried every [`X_STEP`] pixels across and [`Y_STEP`] down on the resampled
+    /// Windows are tried every `X_STEP` pixels across and `Y_STEP` down on the resampled
     /// patch: one integral of the orientation votes per scale gives the cell grids at every
-    /// sub-cell offset. The colour coefficient is computed for the [`COLOUR_CANDIDATES`]
+    /// sub-cell offset. The colour coefficient is computed for the `COLOUR_CANDIDATES`
     /// windows of each scale the booster likes best.
     pub fn search(&self, image: &RgbImage, around: &BoundingBox) -> Option<Detection> {
         let (iw, ih) = (f64::from(image.width()), f64::from(image.height()));

@@ -193,6 +193,12 @@ fn checked_y4m_header<R: Read>(mut reader: R, source_name: &str) -> Result<(Vec<
             }
         }
     }
+    if header.len() == MAX_HEADER && header.last() != Some(&b'\n') {
+        return Err(Error::Y4m {
+            source_name: source_name.to_string(),
+            reason: format!("the stream header is longer than {MAX_HEADER} bytes"),
+        });
+    }
     for token in header.split(|b| b.is_ascii_whitespace()).skip(1) {
         let (Some(&tag), Some(value)) = (token.first(), token.get(1..)) else {
             continue;

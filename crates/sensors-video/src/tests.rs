@@ -630,6 +630,13 @@ fn bad_input_gets_typed_errors() {
             other => panic!("{other:?}"),
         }
     }
+    let mut long = b"YUV4MPEG2 W4 H4".to_vec();
+    long.extend(std::iter::repeat_n(b' ', 5000));
+    long.extend(b"W100000000\nFRAME\n");
+    match io::read_y4m(long.as_slice(), "mem") {
+        Err(Error::Y4m { reason, .. }) => assert!(reason.contains("longer than"), "{reason}"),
+        other => panic!("{other:?}"),
+    }
     // Bad configurations are caught once, at construction.
     let bad = MogConfig {
         background_ratio: 1.5,

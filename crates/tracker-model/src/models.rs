@@ -414,7 +414,7 @@ impl TransitionModel<4> for ConstantVelocity2 {
     }
 
     /// The general step when the covariances couple the axes; otherwise the same arithmetic
-    /// on the two 2 × 2 (position, velocity) blocks, see [`ConstantVelocity2::smooth_step_by_axis`].
+    /// on the two 2 × 2 (position, velocity) blocks, see `ConstantVelocity2::smooth_step_by_axis`.
     fn smooth_step(
         &self,
         f: &SMatrix<f64, 4, 4>,
@@ -659,7 +659,7 @@ impl<const N: usize, const M: usize> ObservationModel<N, M> for LinearObservatio
 
     /// The default Joseph-form update; with H = [I 0] the products with H are replaced by
     /// reading rows and columns, which gives the same numbers with a third fewer operations,
-    /// and when moreover the axes are uncoupled (see [`LinearObservation::update_by_axis`]) the
+    /// and when moreover the axes are uncoupled (see `LinearObservation::update_by_axis`) the
     /// update runs axis by axis.
     fn update(&self, predicted: &Gaussian<N>, z: &SVector<f64, M>) -> Result<Updated<N, M>> {
         if self.observes_leading_components() {

@@ -4,7 +4,7 @@
 //! video with sensors-video's people-like sprites; the same global detections are tracked by
 //! the global-only SMC-PHD filter, GM-PHD, SMC-PHD fused with image-detector's online-boosting
 //! local detectors (which see only the pixels), and SMC-PHD fused with phd-filter's
-//! truth-free simulated local detectors. Each is scored by SR and FAF (eval-metrics'
+//! simulated local detectors (which follow the image content their first box holds, a person or background, as phd-filter models it). Each is scored by SR and FAF (eval-metrics'
 //! `success_rate`, IoU ≥ 0.5, the definition the `phd-pedestrians` pipeline uses), as mean ±
 //! 95 % CI over the reported runs, with the paired SR gain of each fused tracker.
 //!
