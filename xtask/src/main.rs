@@ -78,8 +78,8 @@ enum Command {
         #[arg(long)]
         filter: Option<String>,
     },
-    /// Track MOTChallenge detections and write MOTChallenge tracks. Without --config each
-    /// tracker's model is scaled to the detections' median box size.
+    /// Track MOTChallenge detections and write MOTChallenge tracks. Each tracker's model is
+    /// fitted to the detections (p_d, clutter, births, noise; printed); --config overrides any key.
     Track {
         /// mcmcda: offline (batch) MCMCDA on the box centres; mcmcda-online: the sliding-window
         /// tracker, output frame by frame; gnn: global nearest neighbour with M-of-N
