@@ -407,8 +407,9 @@ impl Pipeline for MotRealistic {
             ]);
         }
         let mut orderings = Table::new(
-            "Issue 13's orderings (claimed ones are checked by the suite; the others are where \
-             we lose)",
+            "Issue 13's orderings (claimed ones are checked by the suite; an unclaimed one either \
+             fails, where we lose, or compares our output, smoothed over the whole file, with \
+             the peer's online output)",
             &["ordering", "holds", "claimed"],
         );
         for (key, statement, holds) in out.orderings() {
