@@ -194,6 +194,22 @@ fn score(scene: &Scene, tracks: &TrackSet) -> Result<Score> {
     })
 }
 
+/// The fused SMC-PHD (the fused filter's p_D, the scenario's fusion settings) with `factory`'s
+/// local detectors, run on `run`.
+fn run_fused<D: LocalDetectorFactory>(
+    p: &Params,
+    filter: PhdConfig,
+    factory: D,
+    run: &Run,
+    feed: Option<&FrameFeed>,
+) -> Result<(TrackSet, Vec<FrameOutput>)> {
+    run_tracker(
+        PhdTracker::with_local_detectors(SmcPhd::new(filter, run.seeds[1])?, factory, p.fusion)?,
+        run,
+        feed,
+    )
+}
+
 /// Runs method `m` on `run`; returns its score and its per-frame output.
 fn track(
     p: &Params,
@@ -219,27 +235,11 @@ fn track(
         2 => {
             let feed = FrameFeed::new();
             let factory = ImageDetectors::new(p.detector.clone(), feed.clone(), run.seeds[2])?;
-            run_tracker(
-                PhdTracker::with_local_detectors(
-                    SmcPhd::new(fused_filter, run.seeds[1])?,
-                    factory,
-                    p.fusion,
-                )?,
-                run,
-                Some(&feed),
-            )?
+            run_fused(p, fused_filter, factory, run, Some(&feed))?
         }
         _ => {
             let factory = SimulatedDetectors::new(&run.scene, p.local, run.seeds[3])?;
-            run_tracker(
-                PhdTracker::with_local_detectors(
-                    SmcPhd::new(fused_filter, run.seeds[1])?,
-                    factory,
-                    p.fusion,
-                )?,
-                run,
-                None,
-            )?
+            run_fused(p, fused_filter, factory, run, None)?
         }
     };
     Ok((score(&run.scene, &tracks)?, frames))
