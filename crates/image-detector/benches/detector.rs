@@ -1,6 +1,7 @@
 //! One local detector's search and update on a 768 × 576 frame (search window twice the
-//! object; one scale, the default, and three), and ten detectors on one frame: one after another (as phd-filter's
-//! detector bank runs them) and in parallel with `detect_all`.
+//! object; one scale, the default, and three), and ten detectors on one frame: one after
+//! another (as phd-filter's detector bank runs them), searches in parallel with `detect_all`
+//! then updates one after another, and both in parallel (`detect_all`, `confirm_all`).
 #![expect(clippy::unwrap_used, reason = "benchmarks run on fixed, valid inputs")]
 
 use std::hint::black_box;
@@ -8,7 +9,9 @@ use std::sync::Arc;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use image::{Rgb, RgbImage};
-use image_detector::{DetectorConfig, FrameFeed, ImageDetector, ImageDetectors, detect_all};
+use image_detector::{
+    DetectorConfig, FrameFeed, ImageDetector, ImageDetectors, confirm_all, detect_all,
+};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tracker_model::{BoundingBox, LocalDetector};
@@ -92,6 +95,13 @@ fn bench(c: &mut Criterion) {
             for (d, b) in detectors.iter_mut().zip(&boxes) {
                 d.confirm(0, b);
             }
+            black_box(found)
+        });
+    });
+    c.bench_function("image_detector/ten_search_and_update_parallel", |bch| {
+        bch.iter(|| {
+            let found = detect_all(&mut detectors, 0, black_box(&shifted));
+            confirm_all(&mut detectors, 0, &boxes);
             black_box(found)
         });
     });

@@ -160,6 +160,11 @@ pub struct OnlineBooster {
     alpha: Vec<f64>,
     /// Scratch: votes of the pool on the current sample.
     votes: Vec<i8>,
+    /// Scratch: learners taken by a selector for the current sample (kept to avoid an
+    /// allocation per update).
+    taken: Vec<bool>,
+    /// Scratch: each learner's error under the current selector.
+    errors: Vec<f64>,
 }
 
 impl OnlineBooster {
@@ -186,6 +191,8 @@ impl OnlineBooster {
             selected: vec![None; config.selectors],
             alpha: vec![0.0; config.selectors],
             votes: vec![0; config.pool],
+            taken: vec![false; config.pool],
+            errors: vec![0.0; config.pool],
         })
     }
 
@@ -200,24 +207,27 @@ impl OnlineBooster {
         }
         let n_pool = self.config.pool;
         let mut lambda = 1.0;
-        let mut taken = vec![false; n_pool];
+        let taken = &mut self.taken;
+        taken.fill(false);
         for n in 0..self.config.selectors {
             let (corr, wrong) = (
                 &mut self.corr[n * n_pool..(n + 1) * n_pool],
                 &mut self.wrong[n * n_pool..(n + 1) * n_pool],
             );
+            // Three passes over the pool (λ to every learner, the errors, the lowest untaken
+            // error) instead of one: the same values, but the first two have no branches and
+            // run several learners at once.
+            for ((c, w), &v) in corr.iter_mut().zip(wrong.iter_mut()).zip(&self.votes) {
+                let right = v == y;
+                *c += if right { lambda } else { 0.0 };
+                *w += if right { 0.0 } else { lambda };
+            }
+            for ((e, &c), &w) in self.errors.iter_mut().zip(corr.iter()).zip(wrong.iter()) {
+                *e = w / (c + w);
+            }
             let mut best: Option<(usize, f64)> = None;
-            for m in 0..n_pool {
-                if self.votes[m] == y {
-                    corr[m] += lambda;
-                } else {
-                    wrong[m] += lambda;
-                }
-                if taken[m] {
-                    continue;
-                }
-                let e = wrong[m] / (corr[m] + wrong[m]);
-                if best.is_none_or(|(_, b)| e < b) {
+            for (m, (&e, &t)) in self.errors.iter().zip(taken.iter()).enumerate() {
+                if !t && best.is_none_or(|(_, b)| e < b) {
                     best = Some((m, e));
                 }
             }

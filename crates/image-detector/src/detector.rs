@@ -355,7 +355,8 @@ impl ImageDetector {
                 let p = patch(image, &b, k, cw, ch)?;
                 let integral = OrientedIntegral::compute(&p.plane);
                 let (max_px, max_py) = ((k - 1) * cw * CELL, (k - 1) * ch * CELL);
-                let mut boosted: Vec<(f64, usize, usize)> = Vec::new();
+                let mut boosted: Vec<(f64, usize, usize)> =
+                    Vec::with_capacity((CELL / X_STEP) * (CELL / Y_STEP) * (k * cw) * (k * ch));
                 for oy in (0..CELL).step_by(Y_STEP) {
                     for ox in (0..CELL).step_by(X_STEP) {
                         let Some(cells) = integral.cells(ox, oy) else {
@@ -565,4 +566,13 @@ pub fn detect_all(
         .zip(around.par_iter())
         .map(|(d, a)| d.detect(frame, a))
         .collect()
+}
+
+/// Runs `confirm` of every detector on `frame` in parallel (each learns from its own box and
+/// draws from its own random stream, so the result does not depend on the thread count).
+pub fn confirm_all(detectors: &mut [ImageDetector], frame: Frame, confirmed: &[BoundingBox]) {
+    detectors
+        .par_iter_mut()
+        .zip(confirmed.par_iter())
+        .for_each(|(d, b)| d.confirm(frame, b));
 }

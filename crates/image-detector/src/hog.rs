@@ -114,25 +114,33 @@ fn reflect(i: isize, n: usize) -> usize {
 
 /// The unsigned orientation of (gx, gy) in [0, π): atan by Cephes' `atanf` reduction and
 /// polynomial (error about 1e-7 rad), inlined because libm's atan2 dominated the cost.
+///
+/// Written without branches: every case is computed and the result selected, so a loop over
+/// pixels can run several at once and noisy pixels cause no mispredictions. The value of each
+/// case is the same as a branching version's (only the selection differs).
 #[inline]
 pub fn unsigned_angle(gx: f32, gy: f32) -> f32 {
     use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
     // Fold into the upper half-plane: (gx, gy) and (−gx, −gy) have the same orientation.
-    let (gx, gy) = if gy < 0.0 || (gy == 0.0 && gx < 0.0) {
-        (-gx, -gy)
-    } else {
-        (gx, gy)
-    };
-    if gx == 0.0 {
-        return if gy == 0.0 { 0.0 } else { FRAC_PI_2 };
-    }
+    let flip = (gy < 0.0) | ((gy == 0.0) & (gx < 0.0));
+    let (gx, gy) = (if flip { -gx } else { gx }, if flip { -gy } else { gy });
+    // t is ±∞ or NaN when gx = 0; that case is selected away at the end.
     let t = gy / gx.abs();
-    let (base, x) = if t > 2.414_213_6 {
-        (FRAC_PI_2, -1.0 / t)
-    } else if t > 0.414_213_57 {
-        (FRAC_PI_4, (t - 1.0) / (t + 1.0))
+    let (far, mid) = (-1.0 / t, (t - 1.0) / (t + 1.0));
+    let (big, medium) = (t > 2.414_213_6, t > 0.414_213_57);
+    let base = if big {
+        FRAC_PI_2
+    } else if medium {
+        FRAC_PI_4
     } else {
-        (0.0, t)
+        0.0
+    };
+    let x = if big {
+        far
+    } else if medium {
+        mid
+    } else {
+        t
     };
     let z = x * x;
     let a = base
@@ -141,7 +149,9 @@ pub fn unsigned_angle(gx: f32, gy: f32) -> f32 {
             * x
             + x);
     let theta = if gx < 0.0 { PI - a } else { a };
-    if theta >= PI { 0.0 } else { theta }
+    let theta = if theta >= PI { 0.0 } else { theta };
+    let vertical = if gy == 0.0 { 0.0 } else { FRAC_PI_2 };
+    if gx == 0.0 { vertical } else { theta }
 }
 
 /// Calls `vote(x, y, lo, hi, w_lo, w_hi)` for every pixel of the top-left `nx × ny` of
@@ -150,31 +160,77 @@ fn for_each_vote(
     plane: &Plane,
     nx: usize,
     ny: usize,
+    vote: impl FnMut(usize, usize, usize, usize, f32, f32),
+) {
+    // The channel count as a constant, so the per-channel loop unrolls (the arithmetic, and
+    // so every value, is the same for both).
+    if plane.channels == 3 {
+        votes_of::<3>(plane, nx, ny, vote);
+    } else {
+        votes_of::<1>(plane, nx, ny, vote);
+    }
+}
+
+/// [`for_each_vote`] for `C` channels. Rows are sliced once per row, and the reflected
+/// neighbours are looked up only at the first and last columns, so the inner loop has no
+/// branches on the border and no bounds checks on the rows (this loop is most of a
+/// detector's time).
+fn votes_of<const C: usize>(
+    plane: &Plane,
+    nx: usize,
+    ny: usize,
     mut vote: impl FnMut(usize, usize, usize, usize, f32, f32),
 ) {
-    let (w, h, c) = (plane.width, plane.height, plane.channels);
-    let at = |x: usize, y: usize, ch: usize| plane.data[(y * w + x) * c + ch];
+    let (w, h) = (plane.width, plane.height);
+    let row_len = w * C;
+    let row = |y: usize| &plane.data[y * row_len..(y + 1) * row_len];
     let bin_width = std::f32::consts::PI / BINS as f32;
+    // One row at a time in three passes: gradients (the strongest channel), then magnitude and
+    // bin position (no branches, so the compiler runs several pixels at once), then the votes.
+    let (mut gxs, mut gys, mut m2s) = (vec![0.0f32; nx], vec![0.0f32; nx], vec![0.0f32; nx]);
+    let (mut mags, mut poss) = (vec![0.0f32; nx], vec![0.0f32; nx]);
     for y in 0..ny {
         let (ym, yp) = (reflect(y as isize - 1, h), reflect(y as isize + 1, h));
-        for x in 0..nx {
-            let (xm, xp) = (reflect(x as isize - 1, w), reflect(x as isize + 1, w));
+        let (here, up, down) = (row(y), row(ym), row(yp));
+        for (x, ((gxo, gyo), m2o)) in gxs
+            .iter_mut()
+            .zip(gys.iter_mut())
+            .zip(m2s.iter_mut())
+            .enumerate()
+        {
+            let (xm, xp) = if x == 0 || x + 1 >= w {
+                (reflect(x as isize - 1, w), reflect(x as isize + 1, w))
+            } else {
+                (x - 1, x + 1)
+            };
+            let (left, right) = (&here[xm * C..][..C], &here[xp * C..][..C]);
+            let (above, below) = (&up[x * C..][..C], &down[x * C..][..C]);
             let (mut best, mut gx, mut gy) = (-1.0f32, 0.0f32, 0.0f32);
-            for ch in 0..c {
-                let dx = at(xp, y, ch) - at(xm, y, ch);
-                let dy = at(x, yp, ch) - at(x, ym, ch);
+            for ch in 0..C {
+                let dx = right[ch] - left[ch];
+                let dy = below[ch] - above[ch];
                 let m2 = dx * dx + dy * dy;
                 if m2 > best {
                     (best, gx, gy) = (m2, dx, dy);
                 }
             }
-            if best <= 0.0 {
+            (*gxo, *gyo, *m2o) = (gx, gy, best);
+        }
+        for ((((mag, pos), &gx), &gy), &m2) in mags
+            .iter_mut()
+            .zip(poss.iter_mut())
+            .zip(&gxs)
+            .zip(&gys)
+            .zip(&m2s)
+        {
+            *mag = m2.sqrt();
+            // Bin position with centres at (i + 0.5) · 20°; pos ∈ [−0.5, 8.5).
+            *pos = unsigned_angle(gx, gy) / bin_width - 0.5;
+        }
+        for (x, ((&m2, &mag), &pos)) in m2s.iter().zip(&mags).zip(&poss).enumerate() {
+            if m2 <= 0.0 {
                 continue;
             }
-            let mag = best.sqrt();
-            let theta = unsigned_angle(gx, gy);
-            // Bin position with centres at (i + 0.5) · 20°; pos ∈ [−0.5, 8.5).
-            let pos = theta / bin_width - 0.5;
             let (lo, frac) = if pos < 0.0 {
                 (BINS - 1, pos + 1.0)
             } else {

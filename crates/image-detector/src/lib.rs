@@ -59,7 +59,7 @@ mod tests;
 pub use boost::{BoostConfig, OnlineBooster};
 pub use colour::ColourHistogram;
 pub use detector::{
-    Detection, DetectorConfig, FrameFeed, ImageDetector, ImageDetectors, detect_all,
+    Detection, DetectorConfig, FrameFeed, ImageDetector, ImageDetectors, confirm_all, detect_all,
 };
 pub use error::{Error, Result};
 pub use hog::{BlockGrid, CellGrid, Plane};

@@ -301,6 +301,68 @@ fn identical_with_one_and_two_threads() {
     assert_eq!(run(1), run(2));
 }
 
+/// Ten detectors on sprites drawn side by side, searched with `detect_all` and updated with
+/// `confirm_all` for 15 frames at `threads` threads; the boxes of every frame.
+fn ten_in_parallel(threads: usize) -> Vec<Vec<Option<BoundingBox>>> {
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    let bg = background(320, 240, &mut rng);
+    let at = |i: usize, k: usize| {
+        BoundingBox::new(
+            4.0 + 31.0 * i as f64 + 0.5 * k as f64,
+            20.0 + 12.0 * (i % 4) as f64,
+            18.0,
+            44.0,
+        )
+        .unwrap()
+    };
+    let draw = |k: usize, rng: &mut ChaCha8Rng| {
+        let mut im = bg.clone();
+        for i in 0..10 {
+            draw_sprite(&mut im, &at(i, k));
+        }
+        for p in im.pixels_mut() {
+            for c in &mut p.0 {
+                *c = (f64::from(*c) + rng.random_range(-8.0..8.0)).clamp(0.0, 255.0) as u8;
+            }
+        }
+        Arc::new(im)
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| {
+        let feed = FrameFeed::new();
+        let mut factory = ImageDetectors::new(DetectorConfig::default(), feed.clone(), 9).unwrap();
+        feed.set(0, draw(0, &mut rng));
+        let mut detectors: Vec<_> = (0..10)
+            .map(|i| factory.detector(0, &at(i, 0)).unwrap())
+            .collect();
+        let mut last: Vec<BoundingBox> = (0..10).map(|i| at(i, 0)).collect();
+        let mut out = Vec::new();
+        for k in 1..15u32 {
+            feed.set(k, draw(k as usize, &mut rng));
+            let found = crate::detect_all(&mut detectors, k, &last);
+            for (l, f) in last.iter_mut().zip(&found) {
+                if let Some(b) = f {
+                    *l = *b;
+                }
+            }
+            crate::confirm_all(&mut detectors, k, &last);
+            out.push(found);
+        }
+        out
+    })
+}
+
+#[test]
+fn detect_all_and_confirm_all_are_identical_with_one_and_two_threads() {
+    let one = ten_in_parallel(1);
+    assert_eq!(one, ten_in_parallel(2));
+    // They found something (the comparison is not of ten empty lists).
+    assert!(one.iter().flatten().filter(|f| f.is_some()).count() > 100);
+}
+
 #[test]
 fn a_sprite_that_leaves_the_image_is_lost_and_its_detector_removed() {
     use phd_filter::{DetectorBank, FusionConfig};
