@@ -3,7 +3,8 @@
 //! one-to-one set of candidate pairs whose time-aligned points, pooled, must fit one
 //! essential matrix. The search is greedy with verification:
 //!
-//! 1. candidates ranked by the number of time-aligned points;
+//! 1. candidates ranked by the number of time-aligned points; the search (steps 2–3) uses the
+//!    `max_candidates` longest, the guided pass of step 5 all of them;
 //! 2. seeds: every compatible pair among the first `seed_pool` candidates, fitted by least
 //!    squares on a subsample and refitted on its inliers; a seed is valid when each of its two
 //!    members keeps `accept_fraction` of its points as inliers; the best valid seed has the
@@ -16,10 +17,17 @@
 //!    inliers wins;
 //! 4. the final pose: [`crate::estimate_relative_pose`] (RANSAC started from the growth's E)
 //!    on all pooled points of the chosen pairs;
-//! 5. a last pass adds every compatible candidate that keeps `accept_fraction` under the
-//!    refined E, and the pose is estimated again.
+//! 5. a guided pass adds every compatible candidate (of all, not only the longest) that keeps
+//!    `accept_fraction` under the refined E, and the pose is estimated again. In this pass
+//!    two time-disjoint fragments of one track (MCMCDA broke it) may both join.
+//!
+//! Why the seed search can fail: the linear 8-point fit of two walkers' tracks is close to
+//! degenerate (each walker's head and feet points lie on a vertical ruled surface), and for
+//! some camera pairs every two-track seed's fit keeps almost no inliers. [`match_tracks_guided`]
+//! skips the search when an approximate E is known (from the network: the pose composed
+//! through other cameras) and runs step 5 alone from it.
 
-use nalgebra::Vector2;
+use nalgebra::{Matrix3, Vector2};
 use rand::Rng;
 use serde::{Deserialize, Serialize};
 use tracker_model::{Frame, ensure_in_range, ensure_positive};
@@ -199,7 +207,7 @@ fn frame_overlap(c: &Candidate) -> usize {
     n
 }
 
-fn inlier_fraction(e: &nalgebra::Matrix3<f64>, c: &Candidate, threshold: f64) -> f64 {
+fn inlier_fraction(e: &Matrix3<f64>, c: &Candidate, threshold: f64) -> f64 {
     let n = c
         .x_a
         .iter()
@@ -273,28 +281,9 @@ pub fn match_tracks<R: Rng + ?Sized>(
     config.check()?;
     ensure_positive(pixel_scale, "pixel_scale")?;
     let threshold = config.threshold_px / pixel_scale;
-    let essential = EssentialConfig {
-        threshold,
-        ..config.essential
-    };
-    // 1. Candidates and their single fits.
-    let mut cands = Vec::new();
-    for (a, ta) in tracks_a.iter().enumerate() {
-        for (b, tb) in tracks_b.iter().enumerate() {
-            let mut c = aligned(ta, tb);
-            if frame_overlap(&c) >= config.min_overlap && c.x_a.len() >= MIN_POINTS {
-                (c.a, c.b) = (a, b);
-                cands.push(c);
-            }
-        }
-    }
-    cands.sort_by(|p, q| {
-        q.x_a
-            .len()
-            .cmp(&p.x_a.len())
-            .then((p.a, p.b).cmp(&(q.a, q.b)))
-    });
-    cands.truncate(config.max_candidates);
+    // 1. Candidates: all of them for the final guided pass, the longest for the search.
+    let all = candidates(tracks_a, tracks_b, config.min_overlap);
+    let cands = &all[..all.len().min(config.max_candidates)];
     if cands.len() < 2 {
         return Ok(None);
     }
@@ -341,9 +330,9 @@ pub fn match_tracks<R: Rng + ?Sized>(
     seeds.sort_by(|p, q| q.0.cmp(&p.0).then(p.1.cmp(&q.1)));
     // 3. Growth from each of the best seeds; the grown hypothesis with the most inliers wins
     // (a seed of two tracks can fit a wrong E that nothing else joins).
-    let mut best: Option<(usize, Vec<usize>, nalgebra::Matrix3<f64>)> = None;
+    let mut best: Option<(usize, Vec<usize>, Matrix3<f64>)> = None;
     for &(_, seed) in seeds.iter().take(config.seed_trials) {
-        let Ok((members, e)) = grow(&cands, seed, threshold, config) else {
+        let Ok((members, e)) = grow(cands, seed, threshold, config) else {
             continue;
         };
         let score: usize = members
@@ -364,52 +353,169 @@ pub fn match_tracks<R: Rng + ?Sized>(
     let Some((_, members, e)) = best else {
         return Ok(None);
     };
-    // 4. Final pose on everything chosen.
-    let (x_a, x_b) = pooled(&cands, &members);
-    let estimate = match estimate_relative_pose_from(&x_a, &x_b, Some(&e), &essential, rng) {
-        Ok(est) => est,
-        Err(_) => return Ok(None),
-    };
-    // 5. One more pass under the final (refined) E: every compatible candidate that keeps
-    // `accept_fraction` joins, best first, and the pose is estimated again.
-    let mut members = members;
+    finish(&all, members, &e, pixel_scale, threshold, config, rng)
+}
+
+/// Guided track correspondence: the relative pose of the two cameras is already known
+/// approximately (`essential_guess`, e.g. composed through the network,
+/// E = \[t\]× R of `pose_b ∘ pose_a⁻¹`, algorithms.md §6), so no seed search is needed.
+/// Every candidate (all of them, not only the `max_candidates` longest) that keeps
+/// `accept_fraction` of its points within the Sampson threshold of the guess joins, best
+/// first and compatible with those already in (one-to-one, except that time-disjoint
+/// fragments of a track may both join); the pose is then estimated from the pair's own
+/// pooled points (RANSAC started from the guess, cheirality, LM), one more guided pass is
+/// made under that estimate, and the pose estimated again. `None` when fewer than
+/// `min_inliers` pooled inliers remain.
+pub fn match_tracks_guided<R: Rng + ?Sized>(
+    tracks_a: &[FeatureTrack],
+    tracks_b: &[FeatureTrack],
+    essential_guess: &Matrix3<f64>,
+    pixel_scale: f64,
+    config: &CorrespondenceConfig,
+    rng: &mut R,
+) -> Result<Option<PairMatching>> {
+    config.check()?;
+    ensure_positive(pixel_scale, "pixel_scale")?;
+    if !essential_guess.iter().all(|v| v.is_finite()) || essential_guess.norm() == 0.0 {
+        return Err(invalid("essential_guess", "not finite or zero".into()));
+    }
+    let threshold = config.threshold_px / pixel_scale;
+    let all = candidates(tracks_a, tracks_b, config.min_overlap);
+    finish(
+        &all,
+        Vec::new(),
+        essential_guess,
+        pixel_scale,
+        threshold,
+        config,
+        rng,
+    )
+}
+
+/// Candidates (track pairs sharing ≥ `min_overlap` frames), most points first.
+fn candidates(
+    tracks_a: &[FeatureTrack],
+    tracks_b: &[FeatureTrack],
+    min_overlap: usize,
+) -> Vec<Candidate> {
+    let mut cands = Vec::new();
+    for (a, ta) in tracks_a.iter().enumerate() {
+        for (b, tb) in tracks_b.iter().enumerate() {
+            let mut c = aligned(ta, tb);
+            if frame_overlap(&c) >= min_overlap && c.x_a.len() >= MIN_POINTS {
+                (c.a, c.b) = (a, b);
+                cands.push(c);
+            }
+        }
+    }
+    cands.sort_by(|p, q| {
+        q.x_a
+            .len()
+            .cmp(&p.x_a.len())
+            .then((p.a, p.b).cmp(&(q.a, q.b)))
+    });
+    cands
+}
+
+/// Whether two candidates share no frame (`origin` is sorted by frame).
+fn time_disjoint(p: &Candidate, q: &Candidate) -> bool {
+    let (mut i, mut j) = (0, 0);
+    while i < p.origin.len() && j < q.origin.len() {
+        match p.origin[i].0.cmp(&q.origin[j].0) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => return false,
+        }
+    }
+    true
+}
+
+/// Whether candidate `k` may join `members` in a guided pass: at every frame each track is
+/// matched to at most one track of the other camera. Two fragments of one object's track
+/// (MCMCDA broke it, or the object left and came back) may both pair with the other
+/// camera's unbroken track, since they never claim the same frame.
+fn compatible_guided(cands: &[Candidate], members: &[usize], k: usize) -> bool {
+    let c = &cands[k];
+    members.iter().all(|&m| {
+        let d = &cands[m];
+        m != k
+            && ((d.a != c.a && d.b != c.b) || (!(d.a == c.a && d.b == c.b) && time_disjoint(d, c)))
+    })
+}
+
+/// Adds, best first, every candidate compatible with `members` that keeps
+/// `accept_fraction` of its points under `e`. Returns whether any joined.
+fn guided_pass(
+    cands: &[Candidate],
+    members: &mut Vec<usize>,
+    e: &Matrix3<f64>,
+    threshold: f64,
+    config: &CorrespondenceConfig,
+) -> bool {
     let mut order: Vec<(f64, usize)> = (0..cands.len())
         .filter(|k| !members.contains(k))
-        .map(|k| {
-            (
-                inlier_fraction(&estimate.essential, &cands[k], threshold),
-                k,
-            )
-        })
+        .map(|k| (inlier_fraction(e, &cands[k], threshold), k))
         .filter(|(f, _)| *f >= config.accept_fraction)
         .collect();
     order.sort_by(|p, q| q.0.total_cmp(&p.0).then(p.1.cmp(&q.1)));
     let before = members.len();
     for (_, k) in order {
-        if members
-            .iter()
-            .all(|&m| cands[m].a != cands[k].a && cands[m].b != cands[k].b)
-        {
+        if compatible_guided(cands, members, k) {
             members.push(k);
         }
     }
-    let (x_a, x_b, estimate) = if members.len() > before {
-        let (xa, xb) = pooled(&cands, &members);
-        match estimate_relative_pose_from(&xa, &xb, Some(&estimate.essential), &essential, rng) {
-            Ok(est) => (xa, xb, est),
+    members.len() > before
+}
+
+/// Steps 4 and 5 of the module doc (and the whole of a guided match, where `members` starts
+/// empty and `e` comes from elsewhere): the pose from the chosen pairs' pooled points, a
+/// guided pass over all candidates under it, the pose again.
+fn finish<R: Rng + ?Sized>(
+    all: &[Candidate],
+    mut members: Vec<usize>,
+    e: &Matrix3<f64>,
+    pixel_scale: f64,
+    threshold: f64,
+    config: &CorrespondenceConfig,
+    rng: &mut R,
+) -> Result<Option<PairMatching>> {
+    let essential = EssentialConfig {
+        threshold,
+        ..config.essential
+    };
+    let mut estimate: Option<TwoViewEstimate> = None;
+    // Two rounds: a pose on the members, a guided pass under it (every candidate, so pairs
+    // outside the `max_candidates` longest and MCMCDA fragments can join too).
+    for _ in 0..2 {
+        if let Some(est) = &estimate {
+            if !guided_pass(all, &mut members, &est.essential, threshold, config) {
+                break;
+            }
+        } else if members.is_empty() {
+            guided_pass(all, &mut members, e, threshold, config);
+        }
+        if members.is_empty() {
+            return Ok(None);
+        }
+        let guess = estimate.as_ref().map_or(*e, |est| est.essential);
+        let (xa, xb) = pooled(all, &members);
+        match estimate_relative_pose_from(&xa, &xb, Some(&guess), &essential, rng) {
+            Ok(est) => estimate = Some(est),
             Err(_) => return Ok(None),
         }
-    } else {
-        (x_a, x_b, estimate)
+    }
+    let Some(estimate) = estimate else {
+        return Ok(None);
     };
     if estimate.n_inliers < config.min_inliers {
         return Ok(None);
     }
+    let (x_a, x_b) = pooled(all, &members);
     let mut origin = Vec::with_capacity(x_a.len());
     let mut matches = Vec::with_capacity(members.len());
     let mut offset = 0;
     for (mi, &m) in members.iter().enumerate() {
-        let c = &cands[m];
+        let c = &all[m];
         let n = c.x_a.len();
         let flags = &estimate.inliers[offset..offset + n];
         let n_in = flags.iter().filter(|&&f| f).count();
@@ -442,7 +548,7 @@ fn grow(
     seed: [usize; 2],
     threshold: f64,
     config: &CorrespondenceConfig,
-) -> Result<(Vec<usize>, nalgebra::Matrix3<f64>)> {
+) -> Result<(Vec<usize>, Matrix3<f64>)> {
     let mut members: Vec<usize> = seed.to_vec();
     let (xa, xb) = pooled(cands, &members);
     let e0 = fit_all_and_refit(&xa, &xb, threshold, config.essential.local_refits)?.0;

@@ -13,7 +13,9 @@
 //!   (cheirality), [`refine_two_view`] (Levenberg-Marquardt on reprojection error), all in
 //!   [`estimate_relative_pose`];
 //! * [`match_tracks`]: which tracks of two cameras are the same objects;
-//! * [`localise`]: the network;
+//!   [`match_tracks_guided`]: the same from a known approximate pose;
+//! * [`localise`]: the network, with a pose and its [`PoseRoute`] for every pair of placed
+//!   cameras and an optional joint refinement ([`bundle_adjust`]);
 //! * [`umeyama`]: similarity alignment, for scoring against the truth.
 //!
 //! Two views of 30 random points, no noise:
@@ -41,6 +43,7 @@
 //! # Ok::<(), camnet::Error>(())
 //! ```
 
+mod bundle;
 mod correspondence;
 mod error;
 mod essential;
@@ -52,8 +55,9 @@ mod tracks;
 #[cfg(test)]
 mod tests;
 
+pub use bundle::{Bundle, BundleObservation, bundle_adjust};
 pub use correspondence::{
-    CorrespondenceConfig, FeatureTrack, PairMatching, TrackMatch, match_tracks,
+    CorrespondenceConfig, FeatureTrack, PairMatching, TrackMatch, match_tracks, match_tracks_guided,
 };
 pub use error::{Error, Result};
 pub use essential::{
@@ -66,7 +70,9 @@ pub use geometry::{
     Intrinsics, Pose, Similarity, angle_between_deg, project, rotation_error_deg, skew,
     triangulate, umeyama,
 };
-pub use network::{CameraTracks, Network, NetworkConfig, PairResult, localise};
+pub use network::{
+    BundleSummary, CameraTracks, Network, NetworkConfig, PairResult, PoseRoute, localise,
+};
 pub use refine::{RefineConfig, Refined, refine_two_view};
 pub use tracks::{
     Blob, Features, ImageTrack, ImageTrackConfig, image_tracks, image_tracks_from_mot,

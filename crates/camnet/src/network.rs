@@ -2,6 +2,14 @@
 //! spanning tree of the view graph weighted by inliers, relative scales from points seen by
 //! three cameras, and every pose in camera 0's frame up to one global scale.
 //!
+//! Every pair of placed cameras then gets a relative pose, by one of three routes
+//! ([`PoseRoute`]): *direct* (its own track correspondence found it), *guided* (the seed
+//! search failed, but the pose composed through the network, pose_b ∘ pose_a⁻¹, gives an E
+//! under which the pair's own track pairs are found by Sampson distance, and the pose is
+//! estimated from those points alone, [`match_tracks_guided`]), or *composed* (no own
+//! correspondences: the composed pose itself). After a guided pass the tree and scales are
+//! computed once more, with the guided pairs as candidate edges.
+//!
 //! Scale: camera 0's first tree edge has |t| = 1. An edge (p → c) takes its scale from an
 //! already-scaled edge (q, p) at p: the same image point of camera p (track, frame, feature)
 //! is triangulated in both pairs, and the scale ratio is the median over such points of the
@@ -9,16 +17,20 @@
 
 use std::collections::{BTreeMap, HashMap};
 
-use nalgebra::Vector3;
+use nalgebra::{Vector2, Vector3};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use tracker_model::Frame;
 
-use crate::correspondence::{CorrespondenceConfig, FeatureTrack, PairMatching, match_tracks};
+use crate::bundle::{BundleObservation, bundle_adjust};
+use crate::correspondence::{
+    CorrespondenceConfig, FeatureTrack, PairMatching, match_tracks, match_tracks_guided,
+};
 use crate::error::{Error, Result};
-use crate::geometry::{Intrinsics, Pose, triangulate};
+use crate::geometry::{Intrinsics, Pose, project, triangulate};
+use crate::refine::RefineConfig;
 use crate::tracks::{Features, ImageTrack};
 
 /// One camera: its intrinsics and its image tracks.
@@ -41,6 +53,12 @@ pub struct NetworkConfig {
     /// A scale transfer needs at least this many points seen by the three cameras (default
     /// 5).
     pub min_scale_points: usize,
+    /// Pairs the correspondence search left without a pose, whose two cameras are placed,
+    /// are matched again guided by the composed pose (default true).
+    pub guided: bool,
+    /// Joint refinement of all placed cameras and the triangulated track points
+    /// ([`bundle_adjust`]) after the tree; `None` (default) skips it.
+    pub bundle: Option<RefineConfig>,
 }
 
 impl Default for NetworkConfig {
@@ -49,8 +67,23 @@ impl Default for NetworkConfig {
             features: Features::TopBottom,
             correspondence: CorrespondenceConfig::default(),
             min_scale_points: 5,
+            guided: true,
+            bundle: None,
         }
     }
+}
+
+/// Where a pair's relative pose came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PoseRoute {
+    /// The pair's own track correspondence search ([`match_tracks`]).
+    Direct,
+    /// The pair's own points, found under the E of the pose composed through the network
+    /// ([`match_tracks_guided`]).
+    Guided,
+    /// Composed through the network (pose_b ∘ pose_a⁻¹), no own correspondences.
+    Composed,
 }
 
 /// One camera pair (a < b).
@@ -60,8 +93,14 @@ pub struct PairResult {
     pub a: usize,
     /// Camera b.
     pub b: usize,
-    /// The matching and the pose of b relative to a, if any hypothesis passed.
+    /// The matching and the pose of b relative to a from the pair's own points, if any
+    /// (route direct or guided).
     pub matching: Option<PairMatching>,
+    /// The route of `pose`.
+    pub route: Option<PoseRoute>,
+    /// The pose of b relative to a, unit translation: the matching's, or composed through
+    /// the network when both cameras are placed and the pair has no matching.
+    pub pose: Option<Pose>,
 }
 
 /// The localised network.
@@ -76,6 +115,26 @@ pub struct Network {
     pub poses: Vec<Option<Pose>>,
     /// For each tree edge, how many three-camera points set its scale (0 for the first edge).
     pub scale_points: Vec<usize>,
+    /// The joint refinement, when configured and possible (the poses above are then its
+    /// output).
+    pub bundle: Option<BundleSummary>,
+}
+
+/// What the joint refinement did.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BundleSummary {
+    /// The poses before it (from the tree and the scale transfer).
+    pub poses_before: Vec<Option<Pose>>,
+    /// Track points triangulated from two or more placed cameras.
+    pub points: usize,
+    /// Their image observations.
+    pub observations: usize,
+    /// RMS reprojection error per coordinate before and after, normalised units.
+    pub initial_rms: f64,
+    /// See `initial_rms`.
+    pub final_rms: f64,
+    /// LM iterations.
+    pub iterations: usize,
 }
 
 /// The pairwise result for cameras a and b, if any.
@@ -162,9 +221,130 @@ pub fn localise(cameras: &[CameraTracks], config: &NetworkConfig, seed: u64) -> 
                 &config.correspondence,
                 &mut rng,
             )?;
-            Ok(PairResult { a, b, matching })
+            let (route, pose) = match &matching {
+                Some(m) => (Some(PoseRoute::Direct), Some(m.estimate.pose)),
+                None => (None, None),
+            };
+            Ok(PairResult {
+                a,
+                b,
+                matching,
+                route,
+                pose,
+            })
         })
         .collect::<Result<Vec<_>>>()?;
+    let (mut pairs, mut tree, mut poses, mut scale_points) = {
+        let pairs: Vec<PairResult> = pairs;
+        let (tree, poses, scale_points) = place(&pairs, n, config);
+        (pairs, tree, poses, scale_points)
+    };
+    // Guided pass: a pair without a matching whose cameras are both placed is matched under
+    // the composed pose's E; its pose then comes from its own points.
+    if config.guided {
+        let n_pairs = pairs.len() as u64;
+        let guided: Vec<(usize, PairMatching)> = pairs
+            .par_iter()
+            .enumerate()
+            .filter(|(_, p)| p.matching.is_none())
+            .map(|(k, p)| -> Result<Option<(usize, PairMatching)>> {
+                let (Some(pa), Some(pb)) = (poses[p.a], poses[p.b]) else {
+                    return Ok(None);
+                };
+                let Some(rel) = unit_relative(&pa, &pb) else {
+                    return Ok(None);
+                };
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                rng.set_stream(n_pairs + k as u64);
+                let scale = 0.5
+                    * (cameras[p.a].intrinsics.mean_focal() + cameras[p.b].intrinsics.mean_focal());
+                Ok(match_tracks_guided(
+                    &features[p.a],
+                    &features[p.b],
+                    &rel.essential(),
+                    scale,
+                    &config.correspondence,
+                    &mut rng,
+                )?
+                .map(|m| (k, m)))
+            })
+            .collect::<Result<Vec<_>>>()?
+            .into_iter()
+            .flatten()
+            .collect();
+        if !guided.is_empty() {
+            for (k, m) in guided {
+                pairs[k].route = Some(PoseRoute::Guided);
+                pairs[k].pose = Some(m.estimate.pose);
+                pairs[k].matching = Some(m);
+            }
+            (tree, poses, scale_points) = place(&pairs, n, config);
+        }
+    }
+    let mut bundle = None;
+    if let Some(refine) = &config.bundle {
+        let gate = 3.0 * config.correspondence.threshold_px
+            / cameras
+                .iter()
+                .map(|c| c.intrinsics.mean_focal())
+                .fold(f64::INFINITY, f64::min);
+        if let Some((placed, points, obs)) = network_points(&features, &pairs, &poses, gate)
+            && let Ok(b) = bundle_adjust(
+                &placed.iter().filter_map(|&c| poses[c]).collect::<Vec<_>>(),
+                &points,
+                &obs,
+                refine,
+            )
+        {
+            let poses_before = poses.clone();
+            for (&c, pose) in placed.iter().zip(&b.poses) {
+                poses[c] = Some(*pose);
+            }
+            bundle = Some(BundleSummary {
+                poses_before,
+                points: points.len(),
+                observations: obs.len(),
+                initial_rms: b.initial_rms,
+                final_rms: b.final_rms,
+                iterations: b.iterations,
+            });
+        }
+    }
+    // Composed poses for the rest.
+    for p in &mut pairs {
+        if p.pose.is_none()
+            && let (Some(pa), Some(pb)) = (poses[p.a], poses[p.b])
+            && let Some(rel) = unit_relative(&pa, &pb)
+        {
+            p.route = Some(PoseRoute::Composed);
+            p.pose = Some(rel);
+        }
+    }
+    Ok(Network {
+        pairs,
+        tree,
+        poses,
+        scale_points,
+        bundle,
+    })
+}
+
+/// The pose of b relative to a (both `camera_from_camera0`) with unit translation; `None` for
+/// coincident centres.
+fn unit_relative(pose_a: &Pose, pose_b: &Pose) -> Option<Pose> {
+    let rel = pose_b.compose(&pose_a.inverse());
+    let t = rel.translation.try_normalize(1e-12)?;
+    Some(Pose {
+        rotation: rel.rotation,
+        translation: t,
+    })
+}
+
+/// The tree, poses and scale points of a [`Network`] from its pairs.
+type Placement = (Vec<(usize, usize)>, Vec<Option<Pose>>, Vec<usize>);
+
+/// Maximum spanning tree by inliers, scale transfer and poses in camera 0's frame.
+fn place(pairs: &[PairResult], n: usize, config: &NetworkConfig) -> Placement {
     // Maximum spanning tree (Prim from camera 0, ties to the lower pair index).
     let weight = |p: &PairResult| p.matching.as_ref().map_or(0, |m| m.estimate.n_inliers);
     let mut placed = vec![false; n];
@@ -257,10 +437,124 @@ pub fn localise(cameras: &[CameraTracks], config: &NetworkConfig, seed: u64) -> 
         };
         poses[c] = Some(edge.compose(&parent_pose));
     }
-    Ok(Network {
-        pairs,
-        tree,
-        poses,
-        scale_points,
-    })
+    (tree, poses, scale_points)
+}
+
+/// Placed cameras (camera 0 first), points and observations for the joint refinement.
+type BundleInput = (Vec<usize>, Vec<Vector3<f64>>, Vec<BundleObservation>);
+
+/// One observation of a bundle point: (bundle camera, normalised image point).
+type Seen = (usize, Vector2<f64>);
+
+fn find(parent: &mut [usize], mut x: usize) -> usize {
+    while parent[x] != x {
+        parent[x] = parent[parent[x]];
+        x = parent[x];
+    }
+    x
+}
+
+/// The bundle's points: tracks joined across cameras by the pairs' matches (union-find over
+/// (camera, track)); one point per (object, frame, feature) seen by ≥ 2 placed cameras,
+/// triangulated by multi-view DLT (the null vector of the stacked x P₃ − P₁, y P₃ − P₂ rows,
+/// from the symmetric eigen-decomposition of AᵀA). A camera with two tracks of one object at
+/// one frame is left out of that point; an observation more than `gate` (normalised) from its
+/// reprojection, or behind its camera, is dropped. `None` without camera 0 or points.
+fn network_points(
+    features: &[Vec<FeatureTrack>],
+    pairs: &[PairResult],
+    poses: &[Option<Pose>],
+    gate: f64,
+) -> Option<BundleInput> {
+    poses.first()?.as_ref()?;
+    let placed: Vec<usize> = (0..poses.len()).filter(|&c| poses[c].is_some()).collect();
+    let mut slot = vec![usize::MAX; poses.len()];
+    for (i, &c) in placed.iter().enumerate() {
+        slot[c] = i;
+    }
+    let mut offset = Vec::with_capacity(features.len());
+    let mut total = 0;
+    for f in features {
+        offset.push(total);
+        total += f.len();
+    }
+    let mut parent: Vec<usize> = (0..total).collect();
+    for p in pairs {
+        let (Some(m), true) = (&p.matching, poses[p.a].is_some() && poses[p.b].is_some()) else {
+            continue;
+        };
+        for t in &m.matches {
+            let (x, y) = (
+                find(&mut parent, offset[p.a] + t.track_a),
+                find(&mut parent, offset[p.b] + t.track_b),
+            );
+            parent[x] = y;
+        }
+    }
+    // (object, frame, feature) → observations (bundle camera, image point), and whether a
+    // camera saw it twice.
+    let mut seen: BTreeMap<(usize, Frame, usize), Vec<Seen>> = BTreeMap::new();
+    for &c in &placed {
+        for (t, track) in features[c].iter().enumerate() {
+            let object = find(&mut parent, offset[c] + t);
+            for (frame, pts) in track.frames.iter().zip(&track.points) {
+                for (k, x) in pts.iter().enumerate() {
+                    seen.entry((object, *frame, k))
+                        .or_default()
+                        .push((slot[c], *x));
+                }
+            }
+        }
+    }
+    let bundle_poses: Vec<Pose> = placed.iter().filter_map(|&c| poses[c]).collect();
+    let mut points = Vec::new();
+    let mut obs = Vec::new();
+    for list in seen.values() {
+        let mut here: Vec<(usize, Vector2<f64>)> = list
+            .iter()
+            .filter(|(c, _)| list.iter().filter(|(d, _)| d == c).count() == 1)
+            .copied()
+            .collect();
+        if here.len() < 2 {
+            continue;
+        }
+        let mut ata = nalgebra::Matrix4::<f64>::zeros();
+        for (c, x) in &here {
+            let q = &bundle_poses[*c];
+            let r = q.rotation.matrix();
+            let row = |i: usize| {
+                nalgebra::RowVector4::new(r[(i, 0)], r[(i, 1)], r[(i, 2)], q.translation[i])
+            };
+            for a in [row(0) - row(2) * x.x, row(1) - row(2) * x.y] {
+                ata += a.transpose() * a;
+            }
+        }
+        let eig = ata.symmetric_eigen();
+        let Some(i) = (0..4).min_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]))
+        else {
+            continue;
+        };
+        let h = eig.eigenvectors.column(i);
+        if h[3].abs() < 1e-12 {
+            continue;
+        }
+        let x3 = Vector3::new(h[0], h[1], h[2]) / h[3];
+        here.retain(|(c, x)| {
+            let y = bundle_poses[*c].apply(&x3);
+            y.z > 0.0 && project(&y).is_some_and(|u| (u - x).norm() <= gate)
+        });
+        if here.len() < 2 || !x3.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        let point = points.len();
+        points.push(x3);
+        obs.extend(
+            here.iter()
+                .map(|&(camera, x)| BundleObservation { camera, point, x }),
+        );
+    }
+    if points.is_empty() {
+        return None;
+    }
+    Some((placed, points, obs))
 }

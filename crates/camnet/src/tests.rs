@@ -457,10 +457,20 @@ fn network_is_identical_at_one_and_two_threads() {
             .num_threads(threads)
             .build()
             .unwrap()
-            .install(|| localise(&input, &NetworkConfig::default(), 13).unwrap())
+            .install(|| {
+                let config = NetworkConfig {
+                    bundle: Some(RefineConfig::default()),
+                    ..NetworkConfig::default()
+                };
+                localise(&input, &config, 13).unwrap()
+            })
     };
     let (one, two) = (run(1), run(2));
     assert_eq!(one.tree, two.tree);
+    assert_eq!(one.bundle, two.bundle);
+    for (p, q) in one.pairs.iter().zip(&two.pairs) {
+        assert_eq!((p.route, p.pose), (q.route, q.pose));
+    }
     for (p, q) in one.poses.iter().zip(&two.poses) {
         assert_eq!(p, q);
     }
@@ -494,4 +504,331 @@ fn mcmcda_image_tracks_follow_two_blobs() {
         let k = t.sources[0].1;
         assert!(t.sources.iter().all(|&(s, kk)| kk == k && s < 12));
     }
+}
+
+/// Camera `cam`'s tracks as normalised top/bottom feature tracks.
+fn feature_tracks(cam: &(Intrinsics, Pose), tracks: &[ImageTrack]) -> Vec<FeatureTrack> {
+    tracks
+        .iter()
+        .map(|t| FeatureTrack {
+            frames: t.frames.clone(),
+            points: t.normalised(&cam.0, Features::TopBottom),
+        })
+        .collect()
+}
+
+#[test]
+fn guided_matching_finds_true_pairs_and_fragments_from_an_approximate_pose() {
+    let mut rng = ChaCha8Rng::seed_from_u64(14);
+    let cams = cameras();
+    // Camera 0 sees persons 0..4 over frames 0..120; camera 1 sees 2..7 over 10..130, with
+    // person 2's track broken in two (frames 10..60 and 66..130), as MCMCDA does.
+    let a: Vec<ImageTrack> = (0..4)
+        .map(|k| track_of(&cams[0], k, 0..120, 1.0, &mut rng))
+        .collect();
+    let mut b: Vec<ImageTrack> = vec![
+        track_of(&cams[1], 2, 10..60, 1.0, &mut rng),
+        track_of(&cams[1], 2, 66..130, 1.0, &mut rng),
+    ];
+    b.extend((3..7).map(|k| track_of(&cams[1], k, 10..130, 1.0, &mut rng)));
+    let truth = cams[1].1.compose(&cams[0].1.inverse());
+    // The guide is off by 0.09° in rotation and 0.16° in translation direction, about what
+    // the network's composition gives at 1 px (the threshold, 3 px at f = 800, is 0.2°).
+    let guess = Pose {
+        rotation: Rotation3::from_euler_angles(0.001, -0.001, 0.0007) * truth.rotation,
+        translation: (Rotation3::from_euler_angles(0.0, 0.002, 0.002) * truth.translation)
+            .normalize(),
+    };
+    let config = CorrespondenceConfig {
+        threshold_px: 3.0,
+        ..CorrespondenceConfig::default()
+    };
+    let (fa, fb) = (feature_tracks(&cams[0], &a), feature_tracks(&cams[1], &b));
+    let m = match_tracks_guided(&fa, &fb, &guess.essential(), 800.0, &config, &mut rng)
+        .unwrap()
+        .expect("a guided matching");
+    let mut found: Vec<(usize, usize)> = m.matches.iter().map(|t| (t.track_a, t.track_b)).collect();
+    found.sort_unstable();
+    // Track 2 of camera 0 pairs with both fragments (b\[0\], b\[1\]); track 3 with b\[2\].
+    assert_eq!(found, vec![(2, 0), (2, 1), (3, 2)]);
+    // The pose is the pair's own (two walkers' tracks: about 0.2°, not better than the guide
+    // here; the guide only selects the points).
+    let rot = rotation_error_deg(&m.estimate.pose.rotation, &truth.rotation);
+    let dir = angle_between_deg(&m.estimate.pose.translation, &truth.translation);
+    assert!(rot < 0.5 && dir < 1.0, "rotation {rot}°, direction {dir}°");
+    // A guide far from the truth finds nothing (the decoys do not fit a wrong E either).
+    let wrong = Pose {
+        rotation: Rotation3::from_euler_angles(0.2, 0.1, -0.1) * truth.rotation,
+        translation: truth.translation,
+    };
+    let none = match_tracks_guided(&fa, &fb, &wrong.essential(), 800.0, &config, &mut rng).unwrap();
+    assert!(none.is_none());
+    // A zero guide is a typed error, not a panic.
+    assert!(match_tracks_guided(&fa, &fb, &Matrix3::zeros(), 800.0, &config, &mut rng).is_err());
+}
+
+#[test]
+fn pair_with_one_shared_track_gets_its_pose_guided_by_the_network() {
+    // Cameras 1 and 2 share only person 2: no two-track seed exists, so their own search
+    // finds nothing; the pose composed through camera 0 guides the match of that one track,
+    // and the pose comes from its points. Without the guided pass the pair's pose is the
+    // composed one.
+    let mut rng = ChaCha8Rng::seed_from_u64(15);
+    let cams = cameras();
+    let seen: [&[usize]; 3] = [&[0, 1, 2, 3], &[0, 1, 2, 5], &[2, 3, 4]];
+    let input: Vec<CameraTracks> = cams
+        .iter()
+        .zip(seen)
+        .map(|(cam, who)| CameraTracks {
+            intrinsics: cam.0,
+            tracks: who
+                .iter()
+                .map(|&k| track_of(cam, k, 0..100, 0.3, &mut rng))
+                .collect(),
+        })
+        .collect();
+    let truth = cams[2].1.compose(&cams[1].1.inverse());
+    let net = localise(&input, &NetworkConfig::default(), 16).unwrap();
+    assert!(net.poses.iter().all(Option::is_some));
+    let p12 = net.pair(1, 2).unwrap();
+    assert_eq!(p12.route, Some(PoseRoute::Guided));
+    let m = p12.matching.as_ref().unwrap();
+    assert_eq!(
+        m.matches
+            .iter()
+            .map(|t| (t.track_a, t.track_b))
+            .collect::<Vec<_>>(),
+        vec![(2, 0)]
+    );
+    let pose = p12.pose.unwrap();
+    assert_eq!(pose, m.estimate.pose);
+    let rot = rotation_error_deg(&pose.rotation, &truth.rotation);
+    let dir = angle_between_deg(&pose.translation, &truth.translation);
+    assert!(
+        rot < 0.5 && dir < 1.0,
+        "guided: rotation {rot}°, direction {dir}°"
+    );
+    for (a, b) in [(0, 1), (0, 2)] {
+        assert_eq!(net.pair(a, b).unwrap().route, Some(PoseRoute::Direct));
+    }
+    let plain = localise(
+        &input,
+        &NetworkConfig {
+            guided: false,
+            ..NetworkConfig::default()
+        },
+        16,
+    )
+    .unwrap();
+    let p12 = plain.pair(1, 2).unwrap();
+    assert!(p12.matching.is_none());
+    assert_eq!(p12.route, Some(PoseRoute::Composed));
+    let pose = p12.pose.unwrap();
+    // Composed: pose_2 ∘ pose_1⁻¹ of the network's poses, unit translation.
+    let (p1, p2) = (plain.poses[1].unwrap(), plain.poses[2].unwrap());
+    let direct = p2.compose(&p1.inverse());
+    assert!(rotation_error_deg(&pose.rotation, &direct.rotation) < 1e-9);
+    assert!(angle_between_deg(&pose.translation, &direct.translation) < 1e-9);
+    assert!((pose.translation.norm() - 1.0).abs() < 1e-12);
+    assert!(rotation_error_deg(&pose.rotation, &truth.rotation) < 0.5);
+    assert!(angle_between_deg(&pose.translation, &truth.translation) < 1.0);
+}
+
+/// Four cameras around the scene in camera 0's frame and 80 points seen by all, as a
+/// bundle-adjustment problem (poses `camera_from_camera0`, points in camera 0's frame).
+fn bundle_problem(
+    rng: &mut ChaCha8Rng,
+    sigma_px: f64,
+) -> (Vec<Pose>, Vec<Vector3<f64>>, Vec<BundleObservation>) {
+    let mut cams: Vec<Pose> = cameras().iter().map(|c| c.1).collect();
+    cams.push(Pose::look_at(&Vector3::new(-8.0, 8.0, 7.0), &Vector3::new(0.0, 0.0, 0.5)).unwrap());
+    let to0 = cams[0].inverse();
+    let poses: Vec<Pose> = cams.iter().map(|c| c.compose(&to0)).collect();
+    let points: Vec<Vector3<f64>> = (0..80)
+        .map(|_| {
+            let w = Vector3::new(
+                rng.random_range(-4.0..4.0),
+                rng.random_range(-4.0..4.0),
+                rng.random_range(0.0..2.0),
+            );
+            cams[0].apply(&w)
+        })
+        .collect();
+    let mut obs = Vec::new();
+    for (p, x) in points.iter().enumerate() {
+        for (c, pose) in poses.iter().enumerate() {
+            let noise = Vector2::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0))
+                * (sigma_px / 800.0);
+            obs.push(BundleObservation {
+                camera: c,
+                point: p,
+                x: project(&pose.apply(x)).unwrap() + noise,
+            });
+        }
+    }
+    (poses, points, obs)
+}
+
+/// Camera centres over their mean distance from camera 0 (the gauge the bundle holds).
+fn normalised_centres(poses: &[Pose]) -> Vec<Vector3<f64>> {
+    let c0 = poses[0].centre();
+    let mean = poses.iter().map(|p| (p.centre() - c0).norm()).sum::<f64>() / poses.len() as f64;
+    poses.iter().map(|p| (p.centre() - c0) / mean).collect()
+}
+
+#[test]
+fn bundle_adjustment_keeps_noise_free_input_exact() {
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    let (poses, points, obs) = bundle_problem(&mut rng, 0.0);
+    let b = bundle_adjust(&poses, &points, &obs, &RefineConfig::default()).unwrap();
+    assert!(b.initial_rms < 1e-12 && b.final_rms < 1e-12);
+    for (p, q) in b.poses.iter().zip(&poses) {
+        assert!(rotation_error_deg(&p.rotation, &q.rotation) < 1e-9);
+        assert!((p.translation - q.translation).norm() < 1e-9);
+    }
+    for (x, y) in b.points.iter().zip(&points) {
+        assert!((x - y).norm() < 1e-9);
+    }
+}
+
+#[test]
+fn bundle_adjustment_converges_from_a_perturbed_start() {
+    let mut rng = ChaCha8Rng::seed_from_u64(18);
+    let (truth, points, obs) = bundle_problem(&mut rng, 0.0);
+    // Rotations off by ~0.6°, centres by ~2 %, points by ~5 cm; camera 0 exact.
+    let start: Vec<Pose> = truth
+        .iter()
+        .enumerate()
+        .map(|(c, p)| {
+            if c == 0 {
+                return *p;
+            }
+            let r = Rotation3::from_euler_angles(0.006, -0.005, 0.004) * p.rotation;
+            let centre = p.centre() * 1.02 + Vector3::new(0.1, -0.1, 0.05);
+            Pose {
+                rotation: r,
+                translation: -(r * centre),
+            }
+        })
+        .collect();
+    let start_points: Vec<Vector3<f64>> = points
+        .iter()
+        .map(|x| x + Vector3::new(0.05, -0.03, 0.04))
+        .collect();
+    let b = bundle_adjust(&start, &start_points, &obs, &RefineConfig::default()).unwrap();
+    assert!(b.initial_rms > 1e-4, "start rms {}", b.initial_rms);
+    assert!(b.final_rms < 1e-10, "final rms {}", b.final_rms);
+    for (p, q) in b.poses.iter().zip(&truth) {
+        assert!(rotation_error_deg(&p.rotation, &q.rotation) < 1e-6);
+    }
+    // Positions are right up to the global scale, which the bundle holds at the start's.
+    for (p, q) in normalised_centres(&b.poses)
+        .iter()
+        .zip(&normalised_centres(&truth))
+    {
+        assert!((p - q).norm() < 1e-7, "{p} vs {q}");
+    }
+    let mean = |ps: &[Pose]| {
+        let c0 = ps[0].centre();
+        ps.iter().map(|p| (p.centre() - c0).norm()).sum::<f64>()
+    };
+    assert!((mean(&b.poses) / mean(&start) - 1.0).abs() < 1e-12);
+}
+
+#[test]
+fn bundle_adjustment_does_not_increase_the_noisy_reprojection_error() {
+    let mut rng = ChaCha8Rng::seed_from_u64(19);
+    let (truth, points, obs) = bundle_problem(&mut rng, 1.0);
+    let b = bundle_adjust(&truth, &points, &obs, &RefineConfig::default()).unwrap();
+    assert!(b.final_rms <= b.initial_rms);
+    // Uniform ±1 px noise has σ = 1/√3 px. At the least-squares optimum the RMS residual is
+    // σ √(1 − parameters / residuals) = 0.577 √(1 − 258/640) = 0.446 px (18 camera and 240
+    // point parameters, 640 residuals); from the truth the fit must get there.
+    let px = b.final_rms * 800.0;
+    assert!((px - 0.446).abs() < 0.03, "final rms {px} px");
+    assert!(b.initial_rms * 800.0 > 0.5);
+    // Poses stay near the truth (narrow fields of view couple rotation with translation, so
+    // the noise moves them by about a tenth of a degree).
+    for (p, q) in b.poses.iter().zip(&truth) {
+        let e = rotation_error_deg(&p.rotation, &q.rotation);
+        assert!(e < 0.5, "rotation error {e}°");
+    }
+    // From a perturbed start the same optimum is reached.
+    let start: Vec<Pose> = b
+        .poses
+        .iter()
+        .enumerate()
+        .map(|(c, p)| Pose {
+            rotation: if c == 0 {
+                p.rotation
+            } else {
+                Rotation3::from_euler_angles(0.003, 0.002, -0.002) * p.rotation
+            },
+            translation: p.translation,
+        })
+        .collect();
+    let again = bundle_adjust(&start, &points, &obs, &RefineConfig::default()).unwrap();
+    assert!(again.final_rms <= again.initial_rms);
+    assert!((again.final_rms / b.final_rms - 1.0).abs() < 1e-3);
+}
+
+#[test]
+fn bundle_adjustment_rejects_bad_input() {
+    let mut rng = ChaCha8Rng::seed_from_u64(20);
+    let (poses, points, mut obs) = bundle_problem(&mut rng, 0.0);
+    let cfg = RefineConfig::default();
+    assert!(bundle_adjust(&poses[..1], &points, &obs, &cfg).is_err());
+    let mut bad = obs.clone();
+    bad[0].camera = 9;
+    assert!(bundle_adjust(&poses, &points, &bad, &cfg).is_err());
+    // Point 0 seen by one camera only.
+    obs.retain(|o| o.point != 0 || o.camera == 0);
+    assert!(bundle_adjust(&poses, &points, &obs, &cfg).is_err());
+    // All centres at camera 0's: no scale.
+    let same = vec![poses[0]; 4];
+    let (_, _, obs) = bundle_problem(&mut rng, 0.0);
+    assert!(bundle_adjust(&same, &points, &obs, &cfg).is_err());
+}
+
+#[test]
+fn network_bundle_adjustment_lowers_the_reprojection_error() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let cams = cameras();
+    let input = network_tracks(&mut rng, 1.0);
+    let mut config = NetworkConfig {
+        bundle: Some(RefineConfig::default()),
+        ..NetworkConfig::default()
+    };
+    // The scenario's rule: the threshold at ~3σ of the pixel noise.
+    config.correspondence.threshold_px = 3.0;
+    let net = localise(&input, &config, 22).unwrap();
+    let b = net.bundle.as_ref().expect("a bundle");
+    // Persons 0..5 over 100 frames, top and bottom, each seen by two or three cameras.
+    assert!(
+        b.points > 800 && b.observations >= 2 * b.points,
+        "{} points, {} observations",
+        b.points,
+        b.observations
+    );
+    assert!(b.final_rms <= b.initial_rms);
+    // Uniform ±1 px noise: σ = 0.577 px; the optimum's RMS is a little below it.
+    let px = b.final_rms * 800.0;
+    assert!(px < 0.577 && px > 0.35, "final rms {px} px");
+    // Positions after similarity alignment, before and after: both close to the truth.
+    let truth: Vec<Vector3<f64>> = cams.iter().map(|c| c.1.centre()).collect();
+    let err = |poses: &[Option<Pose>]| {
+        let from: Vec<Vector3<f64>> = poses.iter().map(|p| p.unwrap().centre()).collect();
+        let sim = umeyama(&from, &truth).unwrap();
+        from.iter()
+            .zip(&truth)
+            .map(|(f, t)| (sim.apply(f) - t).norm())
+            .fold(0.0, f64::max)
+    };
+    let (before, after) = (err(&b.poses_before), err(&net.poses));
+    assert!(
+        before < 0.2 && after < 0.2,
+        "before {before} m, after {after} m"
+    );
+    let p12 = net.pair(1, 2).unwrap();
+    assert_eq!(p12.route, Some(PoseRoute::Direct));
 }
