@@ -55,6 +55,7 @@ fn sensors() -> Vec<SensorNode> {
             },
             clock_offset_s: 0.0,
             weight: 1.0,
+            exponent: 1.0,
         });
     }
     out

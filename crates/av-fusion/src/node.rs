@@ -70,6 +70,17 @@ pub struct SensorNode {
     pub clock_offset_s: f64,
     /// Fusion weight w_s ≥ 0 (a multiplier in the weighted sum, an exponent in the product).
     pub weight: f64,
+    /// Profile exponent γ_s > 0: the fusion node uses D_s(θ)^{γ_s} in place of the reported
+    /// profile D_s(θ) (1 = as reported). γ > 1 sharpens a profile whose lobe is broader than
+    /// the sensor's bearing error (a small microphone array's beams), γ < 1 tempers one that
+    /// is narrower than its error; in the weighted sum this is the only way to change a lobe's
+    /// width, in the product it acts before the floor (unlike w_s, which acts after it).
+    #[serde(default = "unit_exponent")]
+    pub exponent: f64,
+}
+
+fn unit_exponent() -> f64 {
+    1.0
 }
 
 impl SensorNode {
@@ -82,6 +93,7 @@ impl SensorNode {
             shape: ProfileShape::FullCircle { n_bins: n_beams },
             clock_offset_s: 0.0,
             weight: 1.0,
+            exponent: 1.0,
         }
     }
 
@@ -105,6 +117,7 @@ impl SensorNode {
             },
             clock_offset_s: 0.0,
             weight: 1.0,
+            exponent: 1.0,
         }
     }
 
@@ -125,6 +138,7 @@ impl SensorNode {
             .into());
         }
         ensure_non_negative(self.weight, "weight")?;
+        tracker_model::ensure_positive(self.exponent, "exponent")?;
         if self.shape.n_bins() == 0 {
             return Err(invalid(
                 "n_bins",
@@ -145,8 +159,15 @@ impl SensorNode {
         Ok(())
     }
 
-    /// The report's values as a bearing profile at this node's believed pose.
-    pub fn profile(&self, values: Vec<f64>) -> Result<BearingProfile> {
+    /// The report's values, raised to the node's exponent γ_s, as a bearing profile at this
+    /// node's believed pose.
+    pub fn profile(&self, mut values: Vec<f64>) -> Result<BearingProfile> {
+        // Values are ≥ 0 (checked on arrival); the max-1 or sum-1 scaling of the fusion
+        // removes the factor c^γ a rescaled report would bring. γ = 1 exactly skips the powf,
+        // so such nodes give the same bytes as before γ existed.
+        if self.exponent.to_bits() != 1.0f64.to_bits() {
+            values.iter_mut().for_each(|v| *v = v.powf(self.exponent));
+        }
         Ok(match self.shape {
             ProfileShape::FullCircle { .. } => BearingProfile::full_circle(self.pose, values)?,
             ProfileShape::Sector {

@@ -360,6 +360,7 @@ fn road_sensors() -> Vec<SensorNode> {
             },
             clock_offset_s: 0.0,
             weight: 1.0,
+            exponent: 1.0,
         });
     }
     sensors
@@ -504,4 +505,29 @@ fn the_tracker_period_must_match_the_scheduler() {
     .expect("valid pipeline");
     p.process(3).expect("ok");
     assert!(matches!(p.process(2), Err(Error::TickOutOfOrder { .. })));
+}
+
+#[test]
+fn the_exponent_sharpens_a_profile_in_closed_form() {
+    // exp(−½(θ/σ)²)^4 = exp(−½(θ/(σ/2))²): a Gaussian bump raised to γ = 4 is the bump of half
+    // the width.
+    let mut node = SensorNode::audio("a", pose(0.0, 0.0, 10.0), 36);
+    let broad = bump(&node, 40.0 * DEG, 30.0 * DEG);
+    let narrow = bump(&node, 40.0 * DEG, 15.0 * DEG);
+    node.exponent = 4.0;
+    node.check().expect("a valid node");
+    let profile = node.profile(broad.clone()).expect("a valid profile");
+    for (got, want) in profile.values().iter().zip(&narrow) {
+        assert!((got - want).abs() < 1e-12, "{got} vs {want}");
+    }
+    // γ = 1 leaves the values as reported.
+    node.exponent = 1.0;
+    assert_eq!(
+        node.profile(broad.clone()).expect("valid").values(),
+        &broad[..]
+    );
+    for bad in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        node.exponent = bad;
+        assert!(node.check().is_err(), "exponent {bad} accepted");
+    }
 }
