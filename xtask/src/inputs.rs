@@ -254,6 +254,106 @@ pub fn fuzz_eval(data: &[u8]) {
     }
 }
 
+/// The most detection rows `fuzz_track` runs (the rest of a longer file is dropped), so that
+/// one input runs in milliseconds.
+pub const FUZZ_TRACK_ROWS: usize = 40;
+
+/// The work knobs of a tracker configuration and the most `fuzz_track` lets an input ask for
+/// (a missing key gets this value too): the chains' lengths, windows, particle counts,
+/// coasting and extrapolation. The tables' parsing and checks with any value are fuzzed by
+/// `track_config`.
+const FUZZ_TRACK_CAPS: [(&str, &str, i64); 11] = [
+    ("offline", "samples_per_detection", 2),
+    ("offline", "min_samples", 300),
+    ("online", "samples_per_scan", 5),
+    ("online", "window", 4),
+    ("online", "coast_scans", 8),
+    ("fit", "iterations", 1),
+    ("phd", "particles_per_target", 30),
+    ("phd", "birth_particles", 15),
+    ("phd", "max_particles", 3000),
+    ("boxes", "extrapolate_frames", 5),
+    ("phd_labels", "max_misses", 16),
+];
+
+/// Fuzz entry: `cargo xtask track` end to end, every tracker. The bytes before the first NUL
+/// are the detection file (at most [`FUZZ_TRACK_ROWS`] rows are run), those after it a
+/// configuration TOML (none without a NUL), its work knobs capped (`FUZZ_TRACK_CAPS`). Frame
+/// numbers are arbitrary, so far-apart frames are fuzzed too. Every tracker either returns a
+/// typed error or tracks whose points are finite boxes of positive size, at frames within the
+/// input's first and last frame widened by `[boxes] extrapolate_frames`.
+pub fn fuzz_track(data: &[u8]) {
+    use scenarios::track::{TrackConfig, Tracker, empty_output_warning, track_detections};
+    let (dets, config) = match data.iter().position(|&b| b == 0) {
+        Some(i) => (&data[..i], Some(&data[i + 1..])),
+        None => (data, None),
+    };
+    let Ok((mut rows, _notes)) =
+        scenarios::mot::read_detections(&String::from_utf8_lossy(dets), "dets")
+    else {
+        return;
+    };
+    rows.truncate(FUZZ_TRACK_ROWS);
+    let mut table = match config.map(std::str::from_utf8) {
+        None => toml::Table::new(),
+        Some(Ok(text)) => match text.parse::<toml::Table>() {
+            Ok(table) => table,
+            Err(_) => return,
+        },
+        Some(Err(_)) => return,
+    };
+    for (name, key, cap) in FUZZ_TRACK_CAPS {
+        let entry = table
+            .entry(name)
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+        if let toml::Value::Table(t) = entry {
+            match t.get(key) {
+                Some(toml::Value::Integer(v)) if *v <= cap => {}
+                Some(toml::Value::Integer(_)) | None => {
+                    t.insert(key.into(), toml::Value::Integer(cap));
+                }
+                Some(_) => {}
+            }
+        }
+    }
+    let Ok(settings) = table.try_into::<TrackConfig>() else {
+        return;
+    };
+    let Ok(effective) = settings.resolve(&rows) else {
+        return;
+    };
+    let extra = effective.boxes.extrapolate_frames;
+    let first = rows.iter().map(|r| r.frame).min().unwrap_or(0);
+    let last = rows.iter().map(|r| r.frame).max().unwrap_or(0);
+    let span = first.saturating_sub(extra)..=last.saturating_add(extra);
+    for tracker in Tracker::ALL {
+        let Ok(set) = track_detections(tracker, &rows, &settings, 1) else {
+            continue;
+        };
+        let _ = empty_output_warning(tracker, &rows, &effective, &set);
+        for track in set.tracks() {
+            for p in track.points() {
+                assert!(
+                    span.contains(&p.frame),
+                    "{tracker}: a point at frame {} outside {span:?}",
+                    p.frame
+                );
+                if let tracker_model::Location::Box(b) = p.location {
+                    assert!(
+                        [b.left, b.top, b.width, b.height]
+                            .iter()
+                            .all(|v| v.is_finite())
+                            && b.width > 0.0
+                            && b.height > 0.0,
+                        "{tracker}: frame {}: box {b:?}",
+                        p.frame
+                    );
+                }
+            }
+        }
+    }
+}
+
 fn all_numbers_finite(v: &serde_json::Value) -> bool {
     match v {
         serde_json::Value::Number(n) => n.as_f64().is_none_or(f64::is_finite),
@@ -267,7 +367,7 @@ fn all_numbers_finite(v: &serde_json::Value) -> bool {
 pub type FuzzEntry = fn(&[u8]);
 
 /// The fuzz targets: name (also the corpus directory under `fuzz/corpus/`) and entry.
-pub const FUZZ_TARGETS: [(&str, FuzzEntry); 8] = [
+pub const FUZZ_TARGETS: [(&str, FuzzEntry); 9] = [
     ("mot_reader", fuzz_mot),
     ("scenario_toml", fuzz_scenario_toml),
     ("track_config", fuzz_track_config),
@@ -276,6 +376,7 @@ pub const FUZZ_TARGETS: [(&str, FuzzEntry); 8] = [
     ("image_reader", fuzz_image),
     ("y4m_reader", fuzz_y4m),
     ("eval_end_to_end", fuzz_eval),
+    ("track_end_to_end", fuzz_track),
 ];
 
 /// A short description of a load error with its file, for callers that read files.

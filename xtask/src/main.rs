@@ -84,7 +84,8 @@ enum Command {
         /// mcmcda: offline (batch) MCMCDA on the box centres; mcmcda-online: the sliding-window
         /// tracker, output frame by frame; gnn: global nearest neighbour with M-of-N
         /// confirmation on the box centres (all three output boxes fitted to each track's
-        /// detections); phd: SMC-PHD on the boxes themselves.
+        /// detections); gnn-online: GNN output frame by frame, coasting through misses; phd:
+        /// SMC-PHD on the boxes themselves.
         #[arg(long, required_unless_present = "print_config")]
         tracker: Option<scenarios::track::Tracker>,
         /// Detections (frame,id,left,top,width,height,conf,...).
@@ -108,9 +109,15 @@ enum Command {
         /// --input's boxes when given, with --config applied.
         #[arg(long)]
         print_config: bool,
-        /// With --tracker mcmcda: run the online sliding-window tracker (mcmcda-online).
+        /// With --tracker mcmcda: run the online sliding-window tracker (mcmcda-online); with
+        /// --tracker gnn: output frame by frame (gnn-online).
         #[arg(long)]
         online: bool,
+        /// With --tracker phd: a folder of the video's frames (PNG/PGM/PPM, frame number in
+        /// the file name, e.g. img1/000001.png); SMC-PHD is fused with an image local detector
+        /// per target (image-detector), as in the phd-images scenarios.
+        #[arg(long)]
+        frames: Option<PathBuf>,
     },
     /// Write a realistic pedestrian sequence (scenarios::walkers): OUT-det.txt (detections
     /// with scores) and OUT-gt.txt (ground truth), MOTChallenge text.
@@ -182,10 +189,14 @@ fn main() -> ExitCode {
             seed,
             print_config,
             online,
+            frames,
         } => track::run(&track::Request {
             tracker: match (tracker, online) {
                 (Some(scenarios::track::Tracker::Mcmcda), true) => {
                     Some(scenarios::track::Tracker::McmcdaOnline)
+                }
+                (Some(scenarios::track::Tracker::Gnn), true) => {
+                    Some(scenarios::track::Tracker::GnnOnline)
                 }
                 (t, _) => t,
             },
@@ -194,6 +205,7 @@ fn main() -> ExitCode {
             config: config.as_deref(),
             seed,
             print_config,
+            frames: frames.as_deref(),
         }),
         Command::Walkers {
             seed,

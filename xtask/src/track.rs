@@ -8,7 +8,7 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use scenarios::mot::read_detections;
 use scenarios::track::{
-    TrackConfig, Tracker, empty_output_warning, render_config, track_detections,
+    TrackConfig, Tracker, empty_output_warning, render_config, track_detections_with_frames,
 };
 use tracker_model::{MotRow, format_mot};
 
@@ -48,6 +48,8 @@ pub struct Request<'a> {
     pub seed: u64,
     /// Print the effective configuration instead of tracking.
     pub print_config: bool,
+    /// A folder of frames: run the PHD tracker fused with image local detectors on them.
+    pub frames: Option<&'a Path>,
 }
 
 /// Runs the command.
@@ -68,7 +70,7 @@ pub fn run(req: &Request<'_>) -> Outcome {
     };
     let rows = read_input(input)?;
     let start = std::time::Instant::now();
-    let set = track_detections(tracker, &rows, &settings, req.seed)?;
+    let set = track_detections_with_frames(tracker, &rows, &settings, req.seed, req.frames)?;
     let elapsed = start.elapsed().as_secs_f64();
     let effective = settings.resolve(&rows)?;
     if let Some(warning) = empty_output_warning(tracker, &rows, &effective, &set) {
@@ -120,14 +122,18 @@ fn fitted_summary(tracker: Tracker, c: &scenarios::track::EffectiveConfig) -> St
         ),
         _ => format!(
             "fitted p_d {:.3}, clutter {:.3}/frame, births {:.4}/frame, R diag [{:.2}, {:.2}] px², \
-             q {:.3} px²/frame⁴, v̄ {:.1} px/frame",
+             q {:.3} px²/frame⁴, v̄ {:.1} px/frame, d̄ {} frames; {}",
             m.p_detect,
             m.clutter_per_scan,
             m.births_per_scan,
             m.measurement_noise[(0, 0)],
             m.measurement_noise[(1, 1)],
             q,
-            m.max_speed
+            m.max_speed,
+            m.max_gap,
+            c.score_model
+                .as_ref()
+                .map_or_else(|| "scores unused".to_string(), |s| s.summary())
         ),
     }
 }

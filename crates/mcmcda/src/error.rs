@@ -66,6 +66,14 @@ pub enum Error {
     /// More measurements than a [`MeasId`] can number.
     #[error("more than 2^32 measurements")]
     TooManyMeasurements,
+    /// A scan's score ratios do not match its points one for one.
+    #[error("{scores} log score ratios for {points} points; give one per point")]
+    ScoreCount {
+        /// Points in the scan.
+        points: usize,
+        /// Ratios given.
+        scores: usize,
+    },
     /// A whole-problem window was asked of a problem without scans.
     #[error("the problem holds no scans")]
     EmptyProblem,

@@ -21,7 +21,10 @@
 //!
 //!   c_kj = −ln [ p_d N(z_j; ẑ_k, S_k) / ((1 − p_d) λ) ],
 //!
-//! and leaving a track unassigned costs 0. A pair with c_kj ≥ 0 is never worth taking, so
+//! and leaving a track unassigned costs 0. With detection scores s
+//! ([`crate::Problem::push_scan_scored`]) the measurement's likelihood under "target" and
+//! under "clutter or newborn" carries the score densities f₁(s) and f₀(s) (Lerro &
+//! Bar-Shalom 1993, amplitude information), so c_kj loses ln f₁(s_j)/f₀(s_j). A pair with c_kj ≥ 0 is never worth taking, so
 //! this is also a gate: d² < 2 ln[p_d / ((1 − p_d) λ 2π √|S|)]. The old forced assignment
 //! ([`AssignmentCost::Forced`], as many gated pairs as possible, cost −ln N) is kept for the
 //! NNF that starts the chain, as in the paper.
@@ -207,8 +210,15 @@ pub fn nearest_neighbour_tracks(
                 };
                 let (next, maha) = model.step(&node, problem.position(m), gap);
                 if maha <= config.gate {
-                    // −ln N(z; ẑ, S), then the log-likelihood ratio's constant.
-                    let cost = node.cum_log_likelihood() - next.cum_log_likelihood() - log_ratio;
+                    // −ln N(z; ẑ, S), then the log-likelihood ratio's constant and the
+                    // score's ratio ln f₁(s)/f₀(s) (Lerro & Bar-Shalom 1993; 0 without
+                    // scores). The forced NNF keeps its pure kinematic cost.
+                    let score = match config.cost {
+                        AssignmentCost::Forced => 0.0,
+                        AssignmentCost::LogLikelihoodRatio => problem.log_score_ratio(m),
+                    };
+                    let cost =
+                        node.cum_log_likelihood() - next.cum_log_likelihood() - log_ratio - score;
                     if config.cost == AssignmentCost::Forced || cost < 0.0 {
                         pairs.push((cost, k, j, next));
                     }

@@ -168,7 +168,19 @@ impl OnlineTracker {
 
     /// Processes the scan at `frame` (after any empty scans needed to reach it).
     pub fn push_scan(&mut self, frame: Frame, points: &[Vec2]) -> Result<OnlineStep> {
-        self.problem.push_scan(frame, points)?;
+        self.push_scan_scored(frame, points, &vec![0.0; points.len()])
+    }
+
+    /// [`Self::push_scan`] with each point's score likelihood ratio ln f₁(s)/f₀(s)
+    /// ([`Problem::push_scan_scored`]).
+    pub fn push_scan_scored(
+        &mut self,
+        frame: Frame,
+        points: &[Vec2],
+        log_score_ratios: &[f64],
+    ) -> Result<OnlineStep> {
+        self.problem
+            .push_scan_scored(frame, points, log_score_ratios)?;
         let hi = *self.problem.all_scans()?.end();
         let lo = self.window_start();
         // Scans leaving the window now (one, or more after a jump in frames) keep the

@@ -43,6 +43,9 @@ pub struct Problem {
     scan_base: usize,
     /// Indexed by id − `id_base`, like `scan_of`, `forward` and `backward`.
     positions: Vec<Vec2>,
+    /// ln f₁(s)/f₀(s) of each measurement's detection score s (0 when none was given):
+    /// indexed like `positions`.
+    log_score_ratios: Vec<f64>,
     scan_of: Vec<u32>,
     /// Number of scans, empty ones included (frame − first_frame of the last scan, plus 1).
     n_scans: usize,
@@ -66,6 +69,7 @@ impl Problem {
             id_base: 0,
             scan_base: 0,
             positions: Vec::new(),
+            log_score_ratios: Vec::new(),
             scan_of: Vec::new(),
             n_scans: 0,
             held: Vec::new(),
@@ -90,6 +94,32 @@ impl Problem {
     /// Appends the scan at `frame` (frames skipped before it become empty scans, which cost
     /// nothing to store). Returns the ids given to `points`, in order.
     pub fn push_scan(&mut self, frame: Frame, points: &[Vec2]) -> Result<Vec<MeasId>> {
+        self.push_scan_scored(frame, points, &vec![0.0; points.len()])
+    }
+
+    /// [`Self::push_scan`] with each measurement's score likelihood ratio: `log_score_ratios[i]`
+    /// = ln f₁(sᵢ)/f₀(sᵢ), the log density of point i's detection score sᵢ under "detected
+    /// target" over "false alarm" (Lerro & Bar-Shalom 1993, IEEE AES 29(2): the amplitude
+    /// likelihood ratio). A track's term of the log posterior then gains the ratio of every
+    /// measurement it holds (Oh, Russell & Sastry 2009 eq. 9 with each p_d N(·)/λ_f multiplied
+    /// by f₁(s)/f₀(s)), and GNN's pair costs lose it. All zeros is [`Self::push_scan`].
+    pub fn push_scan_scored(
+        &mut self,
+        frame: Frame,
+        points: &[Vec2],
+        log_score_ratios: &[f64],
+    ) -> Result<Vec<MeasId>> {
+        if log_score_ratios.len() != points.len() {
+            return Err(Error::ScoreCount {
+                points: points.len(),
+                scores: log_score_ratios.len(),
+            });
+        }
+        if log_score_ratios.iter().any(|r| !r.is_finite()) {
+            return Err(Error::Model(tracker_model::Error::NonFinite {
+                what: "log score ratio",
+            }));
+        }
         let next = u64::from(self.first_frame) + self.n_scans as u64;
         if u64::from(frame) < next {
             return Err(if self.n_scans == 0 {
@@ -107,7 +137,13 @@ impl Problem {
         self.n_scans = (frame - self.first_frame) as usize + 1;
         points
             .iter()
-            .map(|p| self.add_measurement(frame, *p))
+            .zip(log_score_ratios)
+            .map(|(p, &r)| {
+                let id = self.add_measurement(frame, *p)?;
+                let slot = self.slot(id);
+                self.log_score_ratios[slot] = r;
+                Ok(id)
+            })
             .collect()
     }
 
@@ -138,6 +174,7 @@ impl Problem {
         let id = MeasId::try_from(self.n_measurements()).map_err(|_| Error::TooManyMeasurements)?;
         let slot = self.positions.len();
         self.positions.push(position);
+        self.log_score_ratios.push(0.0);
         self.scan_of.push(scan as u32);
         let d_bar = self.max_gap;
         self.forward.extend((0..d_bar).map(|_| Vec::new()));
@@ -233,6 +270,7 @@ impl Problem {
         }
         let n_drop = (new_base - self.id_base) as usize;
         self.positions.drain(..n_drop);
+        self.log_score_ratios.drain(..n_drop);
         self.scan_of.drain(..n_drop);
         self.forward.drain(..n_drop * d_bar);
         self.backward.drain(..n_drop * d_bar);
@@ -252,6 +290,7 @@ impl Problem {
             }
         }
         shrink(&mut self.positions);
+        shrink(&mut self.log_score_ratios);
         shrink(&mut self.scan_of);
         shrink(&mut self.forward);
         shrink(&mut self.backward);
@@ -402,6 +441,16 @@ impl Problem {
     #[track_caller]
     pub fn position(&self, m: MeasId) -> Vec2 {
         self.positions[self.slot(m)]
+    }
+
+    /// ln f₁(s)/f₀(s) of a measurement's detection score (0 when none was given; see
+    /// [`Self::push_scan_scored`]).
+    ///
+    /// # Panics
+    /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
+    #[track_caller]
+    pub fn log_score_ratio(&self, m: MeasId) -> f64 {
+        self.log_score_ratios[self.slot(m)]
     }
 
     /// Scan index of a measurement.

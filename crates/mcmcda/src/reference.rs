@@ -72,6 +72,9 @@ pub fn log_posterior_by_counts(
     }
     for tr in tracks {
         lp += track_log_likelihood(model, problem, &sensor, tr)?;
+        // A detection's score density is f₁(s), a false alarm's f₀(s): against the
+        // all-clutter constant Π f₀, each measurement of a track adds ln f₁(s)/f₀(s).
+        lp += tr.iter().map(|&m| problem.log_score_ratio(m)).sum::<f64>();
         let remaining = hi - problem.scan_of(tr[tr.len() - 1]);
         if cfg.track_end == TrackEnd::Undetected && remaining > 0 {
             // Σ over when the target disappeared unseen, or that it survived unseen.

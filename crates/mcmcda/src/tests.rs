@@ -1467,3 +1467,140 @@ fn streaming_online_gives_the_same_associations() {
         }
     }
 }
+
+/// The model of [`gnn_links`] over two scans, (0, 0) then (x, 0), with score log ratios `r`
+/// for the two measurements.
+fn scored_pair(x: f64, r: [f64; 2]) -> (Model, Problem) {
+    let model = McmcdaConfig {
+        volume: 1.0e3,
+        clutter_per_scan: 1.0,
+        births_per_scan: 1.0,
+        p_detect: 0.9,
+        measurement_noise: Matrix2::identity(),
+        motion: ConstantVelocity2::mcmcda(1.0, 4.0).unwrap(),
+        track_init: TrackInit::FirstMeasurement {
+            velocity_variance: Some(1.0),
+        },
+        ..McmcdaConfig::default()
+    }
+    .check()
+    .unwrap();
+    let mut problem = Problem::empty(&model, 0);
+    problem
+        .push_scan_scored(0, &[Vector2::new(0.0, 0.0)], &[r[0]])
+        .unwrap();
+    problem
+        .push_scan_scored(1, &[Vector2::new(x, 0.0)], &[r[1]])
+        .unwrap();
+    (model, problem)
+}
+
+#[test]
+fn score_ratios_enter_the_posterior_and_the_gnn_cost_as_computed_by_hand() {
+    use crate::{NearestNeighbourConfig, nearest_neighbour_tracks};
+    // MCMCDA: the track [0, 1] against "both clutter" at x = 5, by hand (eq. 9, S = 4 I):
+    // ln λ_b + ln(1 − p_z) + 2 (ln p_d − ln λ_f) − ln(2π·4) − x²/8
+    // = −6.9078 − 0.0001 + 2 (−0.1054 + 6.9078) − 3.2242 − 3.125 = 0.3478;
+    // the scores add r₀ + r₁ = ln 2 + ln 3 = ln 6 = 1.7918.
+    for (r, by_hand) in [
+        ([0.0, 0.0], 0.3478),
+        ([2f64.ln(), 3f64.ln()], 0.3478 + 1.7918),
+    ] {
+        let (model, problem) = scored_pair(5.0, r);
+        let track = Partition::from_tracks(&model, &problem, 0..=1, &[vec![0, 1]]).unwrap();
+        let clutter = Partition::empty(&model, &problem, 0..=1).unwrap();
+        let w = track.log_posterior() - clutter.log_posterior();
+        assert!((w - by_hand).abs() < 1e-3, "{w} vs {by_hand}");
+        let slow = log_posterior_by_counts(&model, &problem, 0..=1, &[vec![0, 1]]).unwrap()
+            - log_posterior_by_counts(&model, &problem, 0..=1, &[]).unwrap();
+        assert!((slow - w).abs() < 1e-9, "{slow} vs {w}");
+    }
+    // GNN links iff p_d N(z; ẑ, S) f₁/f₀ > (1 − p_d) λ: x² < 8 (ln[0.9 / (0.1 · 2·10⁻³ · 2π · 4)]
+    // + r) = 8 (5.1877 + r); with r = ln 4 the boundary moves from 6.4422 to 7.2520 (by hand),
+    // still inside the χ² gate (7.43).
+    let links = |x: f64, r: f64| {
+        let (model, problem) = scored_pair(x, [0.0, r]);
+        !nearest_neighbour_tracks(&model, &problem, 0..=1, &NearestNeighbourConfig::default())
+            .unwrap()
+            .is_empty()
+    };
+    assert!(links(0.99 * 6.4422, 0.0) && !links(1.01 * 6.4422, 0.0));
+    assert!(links(0.99 * 7.2520, 4f64.ln()) && !links(1.01 * 7.2520, 4f64.ln()));
+    // A count of ratios that does not match the points, or a non-finite one, is an error.
+    let model = McmcdaConfig::default().check().unwrap();
+    let mut problem = Problem::empty(&model, 0);
+    assert!(matches!(
+        problem.push_scan_scored(0, &[Vector2::new(1.0, 1.0)], &[]),
+        Err(Error::ScoreCount {
+            points: 1,
+            scores: 0
+        })
+    ));
+    assert!(
+        problem
+            .push_scan_scored(0, &[Vector2::new(1.0, 1.0)], &[f64::NAN])
+            .is_err()
+    );
+    assert_eq!(problem.n_measurements(), 0);
+}
+
+#[test]
+fn a_high_score_pair_forms_a_track_where_a_low_score_pair_does_not() {
+    use crate::{NearestNeighbourConfig, nearest_neighbour_tracks};
+    // At x = 5 the pair is nearly a tie (0.3478 in favour of the track, above); scores of
+    // ln f₁/f₀ = +1 each make it a track, −1 each clutter, for the exact MAP (enumeration)
+    // and for the chain.
+    for (r, track) in [(1.0, true), (-1.0, false)] {
+        let (model, problem) = scored_pair(5.0, [r, r]);
+        let all = enumerate_partitions(&model, &problem, 0..=1).unwrap();
+        let map = all
+            .iter()
+            .max_by(|a, b| {
+                let lp = |p: &Vec<Vec<u32>>| {
+                    log_posterior_by_counts(&model, &problem, 0..=1, p).unwrap()
+                };
+                lp(a).total_cmp(&lp(b))
+            })
+            .unwrap();
+        assert_eq!(!map.is_empty(), track, "r = {r}: {map:?}");
+        let start = Partition::empty(&model, &problem, 0..=1).unwrap();
+        let run = run_chains(&start, 1, 2_000, 3).unwrap();
+        assert_eq!(!run.tracks.is_empty(), track, "r = {r}: {:?}", run.tracks);
+    }
+    // GNN at x = 6.8, beyond the unscored boundary 6.4422: it links iff
+    // 8 (5.1877 + r) > 6.8² = 46.24, i.e. r > 0.593.
+    for (r, track) in [(1.0, true), (-1.0, false), (0.0, false)] {
+        let (model, problem) = scored_pair(6.8, [r, r]);
+        let tracks =
+            nearest_neighbour_tracks(&model, &problem, 0..=1, &NearestNeighbourConfig::default())
+                .unwrap();
+        assert_eq!(!tracks.is_empty(), track, "r = {r}");
+    }
+}
+
+#[test]
+fn scored_incremental_posterior_matches_the_counts_under_every_move() {
+    // The tiny crossing problem with a score ratio on every measurement: the chain's
+    // incremental log posterior stays equal to the per-scan-count route.
+    let model = tiny_config().check().unwrap();
+    let mut problem = Problem::empty(&model, 0);
+    for (i, s) in tiny_scans().iter().enumerate() {
+        let points: Vec<_> = s.measurements.iter().map(|m| m.value).collect();
+        let ratios: Vec<f64> = (0..points.len())
+            .map(|j| 0.7 * (i as f64) - 1.1 * (j as f64) + 0.3)
+            .collect();
+        problem.push_scan_scored(s.frame, &points, &ratios).unwrap();
+    }
+    let window = problem.all_scans().unwrap();
+    let start = Partition::empty(&model, &problem, window.clone()).unwrap();
+    let mut chain = Chain::new(start, ChaCha8Rng::seed_from_u64(4));
+    for i in 0..3_000 {
+        chain.force_accept = i % 3 == 0;
+        chain.step();
+        let state = chain.state();
+        state.check_invariants().unwrap();
+        let tracks: Vec<Vec<u32>> = state.tracks().map(<[u32]>::to_vec).collect();
+        let fresh = log_posterior_by_counts(&model, &problem, window.clone(), &tracks).unwrap();
+        assert!((fresh - state.log_posterior()).abs() < 1e-8 * fresh.abs().max(1.0));
+    }
+}

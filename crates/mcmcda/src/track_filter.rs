@@ -119,7 +119,11 @@ impl Model {
     /// the track changes, with the false-alarm baseline taken out):
     /// log λ_b + [ends before the last scan] log p_z (or see [`crate::TrackEnd`])
     /// + (t_last − t_first) log(1 − p_z)
-    /// + |τ| (log p_d − log λ_f) + (t_last − t_first + 1 − |τ|) log(1 − p_d) + Σ log N(...).
+    /// + |τ| (log p_d − log λ_f) + (t_last − t_first + 1 − |τ|) log(1 − p_d) + Σ log N(...)
+    /// + Σ ln f₁(s)/f₀(s) over the track's measurements
+    ///
+    /// (the last sum: their score likelihood ratios, [`Problem::push_scan_scored`]; 0 without
+    /// scores).
     pub(crate) fn track_weight(
         &self,
         problem: &Problem,
@@ -145,6 +149,10 @@ impl Model {
             + n * self.log_detect_vs_clutter
             + (span + 1.0 - n) * self.log_miss
             + log_likelihood
+            + meas
+                .iter()
+                .map(|&m| problem.log_score_ratio(m))
+                .sum::<f64>()
     }
 }
 

@@ -35,6 +35,90 @@ pub enum Motion {
     },
 }
 
+/// A 6 × 6 matrix over [`BoxState`], row-major.
+pub type StateMatrix = [[f64; 6]; 6];
+
+impl Motion {
+    /// The exact transition over `frames` frames, as the `frames`-fold composition of the
+    /// one-frame model x ← F x + w, w ~ N(0, Q): F(k) = Fᵏ and Q(k) = Σ_{j<k} Fʲ Q Fʲᵀ, in
+    /// closed form, so a gap of any length costs one prediction.
+    ///
+    /// - Random walk: F(k) = I, Q(k) = k Q.
+    /// - Constant velocity: the one-frame model moves the centre by the velocity, then adds
+    ///   white noise of variance σ_a² to the velocity only (Q = diag(0, σ_a²) per axis), so
+    ///   per axis (position, velocity) F(k) = \[\[1, k\], \[0, 1\]\] and, with Fʲ Q Fʲᵀ =
+    ///   σ_a² \[\[j², j\], \[j, 1\]\], Q(k) = σ_a² \[\[Σj², Σj\], \[Σj, k\]\] over j = 0..k−1:
+    ///   σ_a² \[\[(k−1)k(2k−1)/6, k(k−1)/2\], \[k(k−1)/2, k\]\]. (This is the composition of
+    ///   the filter's own one-frame model; Bar-Shalom's piecewise-constant "DWNA" model, with
+    ///   noise Γ = \[Δ²/2, Δ\], is not closed under composition, so F(kΔ), Q(kΔ) of that model
+    ///   would not equal k steps of it.) The size is a random walk: k σ_s².
+    ///
+    /// ```
+    /// use phd_filter::Motion;
+    ///
+    /// let cv = Motion::ConstantVelocity { acceleration_std: 2.0, size_std: 1.0 };
+    /// let (f, q) = cv.transition(3);
+    /// assert_eq!(f[0][4], 3.0);
+    /// // σ_a² (0² + 1² + 2²), σ_a² (0 + 1 + 2), σ_a² · 3.
+    /// assert_eq!((q[0][0], q[0][4], q[4][4]), (20.0, 12.0, 12.0));
+    /// ```
+    pub fn transition(&self, frames: u64) -> (StateMatrix, StateMatrix) {
+        let k = frames as f64;
+        let mut f = [[0.0; 6]; 6];
+        let mut q = [[0.0; 6]; 6];
+        for (i, row) in f.iter_mut().enumerate() {
+            row[i] = 1.0;
+        }
+        match *self {
+            Motion::RandomWalk {
+                position_std,
+                size_std,
+            } => {
+                q[0][0] = k * position_std * position_std;
+                q[1][1] = q[0][0];
+                q[2][2] = k * size_std * size_std;
+                q[3][3] = q[2][2];
+            }
+            Motion::ConstantVelocity {
+                acceleration_std,
+                size_std,
+            } => {
+                let a2 = acceleration_std * acceleration_std;
+                let (s1, s2) = power_sums(frames);
+                for axis in 0..2 {
+                    f[axis][axis + 4] = k;
+                    q[axis][axis] = a2 * s2;
+                    q[axis][axis + 4] = a2 * s1;
+                    q[axis + 4][axis] = a2 * s1;
+                    q[axis + 4][axis + 4] = a2 * k;
+                }
+                q[2][2] = k * size_std * size_std;
+                q[3][3] = q[2][2];
+            }
+        }
+        (f, q)
+    }
+
+    /// F(k) x: where a state's mean is `frames` frames on (the centre moved by k times the
+    /// velocity under constant velocity; unchanged under the random walk).
+    pub fn predict_mean(&self, x: &BoxState, frames: u64) -> BoxState {
+        let mut out = *x;
+        if let Motion::ConstantVelocity { .. } = self {
+            let k = frames as f64;
+            out[0] += k * x[4];
+            out[1] += k * x[5];
+        }
+        out
+    }
+}
+
+/// Σ j and Σ j² over j = 0..k−1: k(k−1)/2 and (k−1)k(2k−1)/6, in f64 (exact for k < 2²⁰;
+/// beyond, within rounding, and finite for every u64).
+pub(crate) fn power_sums(frames: u64) -> (f64, f64) {
+    let k = frames as f64;
+    (k * (k - 1.0) / 2.0, (k - 1.0) * k * (2.0 * k - 1.0) / 6.0)
+}
+
 /// Parameters of the PHD filters. Defaults follow Yoon, Hwang, Choi & Yoon (2016) where the
 /// paper gives values (p_D = 0.95, birth intensity 0.1, extraction threshold 0.5) and are
 /// otherwise sized for pedestrians of 50-150 pixels in a 640 × 480 image.
@@ -198,6 +282,20 @@ impl PhdConfig {
     /// κ(z): clutter intensity, uniform over measurement space.
     pub fn clutter_intensity(&self) -> f64 {
         self.clutter_rate / self.measurement_volume
+    }
+
+    /// The factor on a target's PHD weight from one stepped frame to the frame `frames` later,
+    /// the frames between holding no detection: survival in each of the k frames, p_Sᵏ, and a
+    /// missed detection in each of the k − 1 frames between, (1 − p_D)ᵏ⁻¹ (an update with no
+    /// measurement scales every weight by 1 − p_D and adds no birth, since births come from
+    /// measurements; Vo, Singh & Doucet 2005's recursion with Z = ∅). For k = 1, p_S.
+    pub fn gap_weight(&self, frames: u64) -> f64 {
+        if frames <= 1 {
+            return self.p_survive;
+        }
+        let k = frames as f64;
+        // In logarithms; a gap of billions of frames gives 0 (an underflow, and the answer).
+        (k * self.p_survive.ln() + (k - 1.0) * (1.0 - self.p_detect).ln()).exp()
     }
 }
 

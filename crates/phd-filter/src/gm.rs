@@ -181,6 +181,22 @@ impl GmPhd {
     /// Runs one frame with the given detections: predict, add the newborns, update, reduce,
     /// extract the estimates, and reduce again with the updated newborns.
     pub fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        self.step_after(1, boxes)
+    }
+
+    /// Runs the frame `frames` frames after the last one, the frames between having had no
+    /// detection, in one prediction by the exact transition ([`Motion::transition`]):
+    /// m ← F(k) m, P ← F(k) P F(k)ᵀ + Q(k), w ← [`PhdConfig::gap_weight`] w. Stepping each
+    /// empty frame would give the same mixture but for the pruning and merging between frames
+    /// (weights scale alike, so pruning after the gap removes what pruning on the way would
+    /// have). The cost does not depend on `frames`; `frames = 0` is an error.
+    pub fn step_after(&mut self, frames: u64, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        if frames == 0 {
+            return Err(Error::InvalidParameter {
+                name: "frames",
+                reason: "0 frames after the last one; a step moves time forward".into(),
+            });
+        }
         let zs: Vec<(usize, Vec4)> = boxes
             .iter()
             .enumerate()
@@ -188,7 +204,7 @@ impl GmPhd {
             .collect();
         let skipped = boxes.len() - zs.len();
         let cfg = self.config;
-        self.predict();
+        self.predict(frames);
         let innovations = self
             .components
             .iter()
@@ -229,12 +245,20 @@ impl GmPhd {
         })
     }
 
-    /// Predict: every component moves by F, gains Q and is weighted by p_S.
-    fn predict(&mut self) {
+    /// Predict over `frames` frames: every component moves by F(k), gains Q(k) and is
+    /// weighted by p_S per frame and 1 − p_D per empty frame between.
+    fn predict(&mut self, frames: u64) {
+        let (f, q) = if frames == 1 {
+            (self.f, self.q)
+        } else {
+            let (f, q) = self.config.motion.transition(frames);
+            (Mat6::from_fn(|i, j| f[i][j]), Mat6::from_fn(|i, j| q[i][j]))
+        };
+        let survive = self.config.gap_weight(frames);
         for c in &mut self.components {
-            c.w *= self.config.p_survive;
-            c.m = self.f * c.m;
-            c.p = self.f * c.p * self.f.transpose() + self.q;
+            c.w *= survive;
+            c.m = f * c.m;
+            c.p = f * c.p * f.transpose() + q;
         }
     }
 

@@ -56,7 +56,9 @@ mod tracker;
 #[cfg(test)]
 mod tests;
 
-pub use config::{BoxMeasurement, BoxState, Motion, PhdConfig, measurement_from_box, state_box};
+pub use config::{
+    BoxMeasurement, BoxState, Motion, PhdConfig, StateMatrix, measurement_from_box, state_box,
+};
 pub use error::{Error, Result};
 pub use fusion::{
     DetectorBank, FusionConfig, MAX_CONFIDENCE, ManagedDetector, Source, fuse, updated_confidence,

@@ -22,9 +22,10 @@ use rayon::prelude::*;
 use tracker_model::BoundingBox;
 
 use crate::config::{
-    BoxMeasurement, BoxState, Likelihood, Motion, PhdConfig, measurement_from_box, state_box,
+    BoxMeasurement, BoxState, Likelihood, Motion, PhdConfig, measurement_from_box, power_sums,
+    state_box,
 };
-use crate::error::Result;
+use crate::error::{Error, Result};
 
 /// Particles per parallel work item (and per generator stream).
 const CHUNK: usize = 2048;
@@ -81,7 +82,7 @@ fn normal<R: Rng + ?Sized>(rng: &mut R) -> f64 {
 }
 
 /// Moves a particle one frame.
-fn propagate<R: Rng + ?Sized>(x: &mut BoxState, motion: &Motion, rng: &mut R) {
+pub(crate) fn propagate<R: Rng + ?Sized>(x: &mut BoxState, motion: &Motion, rng: &mut R) {
     match *motion {
         Motion::RandomWalk {
             position_std,
@@ -102,6 +103,54 @@ fn propagate<R: Rng + ?Sized>(x: &mut BoxState, motion: &Motion, rng: &mut R) {
             x[5] += acceleration_std * normal(rng);
             x[2] = (x[2] + size_std * normal(rng)).max(1.0);
             x[3] = (x[3] + size_std * normal(rng)).max(1.0);
+        }
+    }
+}
+
+/// Moves a particle `frames` frames in one draw from the exact `frames`-step transition
+/// ([`Motion::transition`]): x ← F(k) x + w, w ~ N(0, Q(k)), then the sizes clamped to one
+/// pixel (the one-frame model clamps after every frame; over a gap the clamp applies once, at
+/// its end). One frame is [`propagate`] itself, so consecutive frames give the same draws as
+/// before. The cost does not depend on k.
+pub(crate) fn propagate_by<R: Rng + ?Sized>(
+    x: &mut BoxState,
+    motion: &Motion,
+    frames: u64,
+    rng: &mut R,
+) {
+    if frames <= 1 {
+        propagate(x, motion, rng);
+        return;
+    }
+    let k = frames as f64;
+    let root_k = k.sqrt();
+    match *motion {
+        Motion::RandomWalk {
+            position_std,
+            size_std,
+        } => {
+            x[0] += position_std * root_k * normal(rng);
+            x[1] += position_std * root_k * normal(rng);
+            x[2] = (x[2] + size_std * root_k * normal(rng)).max(1.0);
+            x[3] = (x[3] + size_std * root_k * normal(rng)).max(1.0);
+        }
+        Motion::ConstantVelocity {
+            acceleration_std,
+            size_std,
+        } => {
+            // Per axis, Q(k) = σ² [[S₂, S₁], [S₁, k]] (S₁ = Σj, S₂ = Σj², j < k) factors as
+            // v = σ √k n₁, p = σ (S₁/√k) n₁ + σ √(S₂ − S₁²/k) n₂, with S₂ − S₁²/k = (k³ − k)/12.
+            let (s1, _) = power_sums(frames);
+            let along = acceleration_std * s1 / root_k;
+            let apart = acceleration_std * ((k - 1.0) * k * (k + 1.0) / 12.0).sqrt();
+            let velocity = acceleration_std * root_k;
+            for axis in 0..2 {
+                let (n1, n2) = (normal(rng), normal(rng));
+                x[axis] += k * x[axis + 4] + along * n1 + apart * n2;
+                x[axis + 4] += velocity * n1;
+            }
+            x[2] = (x[2] + size_std * root_k * normal(rng)).max(1.0);
+            x[3] = (x[3] + size_std * root_k * normal(rng)).max(1.0);
         }
     }
 }
@@ -193,6 +242,25 @@ impl SmcPhd {
     /// Runs one frame with the given detections: predict, draw the newborn groups, compute
     /// L(z), update, extract the estimates (eq. 8) and resample.
     pub fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        self.step_after(1, boxes)
+    }
+
+    /// Runs the frame `frames` frames after the last one, the `frames − 1` frames between
+    /// having had no detection, as [`step`](Self::step) would after stepping each of them
+    /// with no box, but in one prediction: every particle moves by the exact `frames`-step
+    /// transition ([`Motion::transition`]) and its weight takes [`PhdConfig::gap_weight`]
+    /// (p_Sᵏ (1 − p_D)ᵏ⁻¹). The frames between give no estimate (estimates come from
+    /// measurements) and no birth; what is skipped is only their resampling, which leaves the
+    /// PHD unchanged in expectation. The cost does not depend on `frames`.
+    ///
+    /// `frames = 1` is [`step`](Self::step); `frames = 0` is an error.
+    pub fn step_after(&mut self, frames: u64, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        if frames == 0 {
+            return Err(Error::InvalidParameter {
+                name: "frames",
+                reason: "0 frames after the last one; a step moves time forward".into(),
+            });
+        }
         let valid: Vec<(usize, BoxMeasurement)> = boxes
             .iter()
             .enumerate()
@@ -200,7 +268,7 @@ impl SmcPhd {
             .collect();
         let skipped = boxes.len() - valid.len();
         let zs: Vec<BoxMeasurement> = valid.iter().map(|v| v.1).collect();
-        self.predict();
+        self.predict(frames);
         let nu = if zs.is_empty() {
             0.0
         } else {
@@ -219,9 +287,11 @@ impl SmcPhd {
         })
     }
 
-    /// Predict: moves every persistent particle and weights it by p_S.
-    fn predict(&mut self) {
+    /// Predict over `frames` frames: moves every persistent particle by the exact transition
+    /// and weights it by p_S per frame and 1 − p_D per empty frame between.
+    fn predict(&mut self, frames: u64) {
         let cfg = self.config;
+        let survive = cfg.gap_weight(frames);
         let seed: u64 = self.rng.random();
         self.particles
             .par_chunks_mut(CHUNK)
@@ -229,8 +299,8 @@ impl SmcPhd {
             .for_each(|(c, chunk)| {
                 let mut rng = stream_rng(seed, c);
                 for p in chunk {
-                    propagate(&mut p.x, &cfg.motion, &mut rng);
-                    p.w *= cfg.p_survive;
+                    propagate_by(&mut p.x, &cfg.motion, frames, &mut rng);
+                    p.w *= survive;
                 }
             });
     }

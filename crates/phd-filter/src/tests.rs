@@ -693,3 +693,229 @@ mod simulated_detectors {
         );
     }
 }
+
+/// Jumping a gap of empty frames in one prediction (issue 20: sparse time).
+mod gaps {
+    use nalgebra::SMatrix;
+    use rand::SeedableRng;
+    use rand_chacha::ChaCha8Rng;
+
+    use super::bx;
+    use crate::smc::{propagate, propagate_by};
+    use crate::{GmConfig, GmPhd, Motion, PhdConfig, SmcPhd};
+
+    type Mat6 = SMatrix<f64, 6, 6>;
+
+    fn cv() -> Motion {
+        Motion::ConstantVelocity {
+            acceleration_std: 1.5,
+            size_std: 0.5,
+        }
+    }
+
+    fn rw() -> Motion {
+        Motion::RandomWalk {
+            position_std: 3.0,
+            size_std: 0.5,
+        }
+    }
+
+    fn max_rel_diff(a: &Mat6, b: &Mat6) -> f64 {
+        let scale = a.abs().max().max(b.abs().max()).max(1.0);
+        (a - b).abs().max() / scale
+    }
+
+    #[test]
+    fn one_k_step_prediction_is_k_single_steps() {
+        // The independent route: compose the one-frame model k times by brute force,
+        // F_k = F F_{k−1}, Q_k = F Q_{k−1} Fᵀ + Q, from the one-frame F and Q written out here.
+        for motion in [cv(), rw()] {
+            let mut f1 = Mat6::identity();
+            let mut q1 = Mat6::zeros();
+            match motion {
+                Motion::ConstantVelocity {
+                    acceleration_std: a,
+                    size_std: s,
+                } => {
+                    f1[(0, 4)] = 1.0;
+                    f1[(1, 5)] = 1.0;
+                    q1[(4, 4)] = a * a;
+                    q1[(5, 5)] = a * a;
+                    q1[(2, 2)] = s * s;
+                    q1[(3, 3)] = s * s;
+                }
+                Motion::RandomWalk {
+                    position_std: p,
+                    size_std: s,
+                } => {
+                    q1[(0, 0)] = p * p;
+                    q1[(1, 1)] = p * p;
+                    q1[(2, 2)] = s * s;
+                    q1[(3, 3)] = s * s;
+                }
+            }
+            let (mut fk, mut qk) = (Mat6::identity(), Mat6::zeros());
+            for k in 1..=1000u64 {
+                fk = f1 * fk;
+                qk = f1 * qk * f1.transpose() + q1;
+                if [1, 2, 3, 7, 50, 1000].contains(&k) {
+                    let (f, q) = motion.transition(k);
+                    let f = Mat6::from_fn(|i, j| f[i][j]);
+                    let q = Mat6::from_fn(|i, j| q[i][j]);
+                    assert!(max_rel_diff(&f, &fk) <= 1e-12, "{motion:?} k = {k}: F");
+                    assert!(
+                        max_rel_diff(&q, &qk) <= 1e-12,
+                        "{motion:?} k = {k}: Q {q} vs {qk}"
+                    );
+                    let x = [10.0, -4.0, 40.0, 90.0, 2.5, -0.5];
+                    let mean = motion.predict_mean(&x, k);
+                    let brute = fk * nalgebra::SVector::<f64, 6>::from(x);
+                    for i in 0..6 {
+                        assert!((mean[i] - brute[i]).abs() <= 1e-12 * brute[i].abs().max(1.0));
+                    }
+                }
+            }
+        }
+        // By hand, k = 4, σ_a² = 2.25: Σj² = 0 + 1 + 4 + 9 = 14, Σj = 6.
+        let (_, q) = cv().transition(4);
+        assert_eq!(
+            (q[0][0], q[0][4], q[4][4]),
+            (14.0 * 2.25, 6.0 * 2.25, 4.0 * 2.25)
+        );
+    }
+
+    #[test]
+    fn gap_weight_is_survival_per_frame_and_a_miss_per_empty_frame() {
+        let config = PhdConfig {
+            p_survive: 0.5,
+            p_detect: 0.75,
+            ..PhdConfig::default()
+        };
+        assert_eq!(config.gap_weight(1), 0.5);
+        // 0.5³ · 0.25² = 1/128.
+        assert!((config.gap_weight(3) - 1.0 / 128.0).abs() < 1e-15);
+        assert_eq!(config.gap_weight(u64::from(u32::MAX)), 0.0);
+    }
+
+    #[test]
+    fn particles_jump_with_the_moments_of_the_k_step_transition() {
+        let mut a = ChaCha8Rng::seed_from_u64(1);
+        let mut b = ChaCha8Rng::seed_from_u64(1);
+        let x0 = [100.0, 50.0, 40.0, 90.0, 3.0, -1.0];
+        // One frame is the one-frame model, draw for draw.
+        for motion in [cv(), rw()] {
+            let (mut x, mut y) = (x0, x0);
+            propagate_by(&mut x, &motion, 1, &mut a);
+            propagate(&mut y, &motion, &mut b);
+            assert_eq!(x, y);
+        }
+        // k = 7 under constant velocity: sample mean and covariance of (c_x, v_x) against
+        // F(7) x0 and Q(7) = 2.25 [[91, 21], [21, 7]] (Σj² = 91, Σj = 21 over j < 7).
+        let n = 200_000;
+        let (mut sp, mut sv, mut spp, mut spv, mut svv) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for _ in 0..n {
+            let mut x = x0;
+            propagate_by(&mut x, &cv(), 7, &mut a);
+            let (p, v) = (x[0] - (100.0 + 7.0 * 3.0), x[4] - 3.0);
+            sp += p;
+            sv += v;
+            spp += p * p;
+            spv += p * v;
+            svv += v * v;
+        }
+        let nf = f64::from(n);
+        let (mp, mv) = (sp / nf, sv / nf);
+        // Standard errors: √(204.75 / n) = 0.032 and √(15.75 / n) = 0.009; variances to 2 %
+        // (their relative standard error is √(2/n) = 0.3 %).
+        assert!(mp.abs() < 0.15 && mv.abs() < 0.05, "means {mp} {mv}");
+        for (got, want) in [
+            (spp / nf, 2.25 * 91.0),
+            (spv / nf, 2.25 * 21.0),
+            (svv / nf, 2.25 * 7.0),
+        ] {
+            assert!((got - want).abs() < 0.02 * want, "{got} vs {want}");
+        }
+    }
+
+    fn config() -> PhdConfig {
+        PhdConfig {
+            p_detect: 0.1,
+            motion: cv(),
+            ..PhdConfig::default()
+        }
+    }
+
+    #[test]
+    fn gm_jump_equals_stepping_every_empty_frame() {
+        let first = [bx(100.0, 200.0, 40.0, 100.0)];
+        let after = [bx(130.0, 190.0, 41.0, 101.0)];
+        let mut jump = GmPhd::new(config(), GmConfig::default()).unwrap();
+        jump.step(&first).unwrap();
+        let mut walk = jump.clone();
+        // Six frames, the first five without a detection.
+        let a = jump.step_after(6, &after).unwrap();
+        for _ in 0..5 {
+            walk.step(&[]).unwrap();
+        }
+        let b = walk.step(&after).unwrap();
+        assert!((a.expected_targets - b.expected_targets).abs() < 1e-12);
+        assert_eq!(jump.components().len(), walk.components().len());
+        for (c, d) in jump.components().iter().zip(walk.components()) {
+            assert!((c.w - d.w).abs() <= 1e-12 * d.w, "{} vs {}", c.w, d.w);
+            assert!((c.m - d.m).abs().max() <= 1e-12 * d.m.abs().max());
+            assert!(max_rel_diff(&c.p, &d.p) <= 1e-12, "{} vs {}", c.p, d.p);
+        }
+    }
+
+    #[test]
+    fn smc_jump_keeps_the_mass_of_stepping_every_empty_frame() {
+        let first = [bx(100.0, 200.0, 40.0, 100.0), bx(300.0, 100.0, 30.0, 80.0)];
+        let mut jump = SmcPhd::new(config(), 2).unwrap();
+        jump.step(&first).unwrap();
+        let mut walk = jump.clone();
+        // Nine empty frames: N̂ is (p_S (1 − p_D))⁹ of what it was, either way (resampling
+        // keeps the total weight).
+        let before: f64 = jump.particles().iter().map(|p| p.w).sum();
+        let a = jump.step_after(9, &[]).unwrap().expected_targets;
+        let mut b = 0.0;
+        for _ in 0..9 {
+            b = walk.step(&[]).unwrap().expected_targets;
+        }
+        let want = before * (0.99f64 * 0.9).powi(9);
+        assert!((a - want).abs() < 1e-12 * want, "{a} vs {want}");
+        assert!((b - want).abs() < 1e-12 * want, "{b} vs {want}");
+    }
+
+    #[test]
+    fn a_gap_of_four_billion_frames_costs_one_step() {
+        let first = [bx(100.0, 200.0, 40.0, 100.0)];
+        for gm in [false, true] {
+            let start = std::time::Instant::now();
+            let out = if gm {
+                let mut f = GmPhd::new(config(), GmConfig::default()).unwrap();
+                f.step(&first).unwrap();
+                let out = f.step_after(4_000_000_000, &first).unwrap();
+                assert!(f.components().iter().all(|c| c.w.is_finite()));
+                out
+            } else {
+                let mut f = SmcPhd::new(config(), 2).unwrap();
+                f.step(&first).unwrap();
+                let out = f.step_after(4_000_000_000, &first).unwrap();
+                assert!(f.particles().iter().all(|p| p.w.is_finite()));
+                out
+            };
+            // Everything from before the gap is forgotten (weight 0): only the newborn is left.
+            assert!(
+                out.expected_targets.abs() < 1e-300,
+                "{}",
+                out.expected_targets
+            );
+            assert!(start.elapsed().as_secs_f64() < 2.0);
+        }
+        let mut f = SmcPhd::new(config(), 2).unwrap();
+        assert!(matches!(
+            f.step_after(0, &first),
+            Err(crate::Error::InvalidParameter { name: "frames", .. })
+        ));
+    }
+}

@@ -57,6 +57,7 @@ mod pipelines;
 mod report;
 mod stats;
 pub mod track;
+pub mod track_frames;
 pub mod walkers;
 
 pub use report::{Axes, Chart, Figure, Section, Series, Style, Table, YAxis, fmt_num};
