@@ -1135,13 +1135,26 @@ impl OfflineConfig {
 }
 
 impl BoxConfig {
-    /// Checks the kernel width (finite, > 0).
+    /// Checks the kernel width (finite, > 0) and bounds the frames output without a detection
+    /// (as `[phd_labels] max_misses`: each is a box per track, so an unbounded value would let
+    /// a configuration ask for billions of boxes).
     pub fn check(&self) -> Result<()> {
         if !(self.smoothing_frames.is_finite() && self.smoothing_frames > 0.0) {
             bail!(
                 "smoothing_frames = {}; it must be finite and > 0",
                 self.smoothing_frames
             );
+        }
+        for (name, frames) in [
+            ("extrapolate_frames", self.extrapolate_frames),
+            ("online_coast_frames", self.online_coast_frames),
+        ] {
+            if frames > MAX_COAST_FRAMES {
+                bail!(
+                    "{name} = {frames} is over {MAX_COAST_FRAMES}: each frame is one output box \
+                     per track"
+                );
+            }
         }
         Ok(())
     }
@@ -2499,6 +2512,10 @@ mod tests {
         );
         let err = error_of("[phd_labels]\nmin_iou = nan\n", Tracker::Mcmcda);
         assert!(err.contains("min_iou"), "{err}");
+        for key in ["extrapolate_frames", "online_coast_frames"] {
+            let err = error_of(&format!("[boxes]\n{key} = 4000000000\n"), Tracker::Gnn);
+            assert!(err.contains("[boxes]") && err.contains(key), "{err}");
+        }
         // The most coasting allowed, over a gap of four billion frames: at most that many
         // boxes, in milliseconds.
         let rows = [1, 2, 3, 4, 5, 4_000_000_000, 4_000_000_001]
