@@ -91,7 +91,7 @@ fn bench(c: &mut Criterion) {
     });
     c.bench_function("image_detector/ten_search_parallel_then_update", |bch| {
         bch.iter(|| {
-            let found = detect_all(&mut detectors, 0, black_box(&shifted));
+            let found = detect_all(&mut detectors, 0, black_box(&shifted)).unwrap();
             for (d, b) in detectors.iter_mut().zip(&boxes) {
                 d.confirm(0, b);
             }
@@ -100,8 +100,8 @@ fn bench(c: &mut Criterion) {
     });
     c.bench_function("image_detector/ten_search_and_update_parallel", |bch| {
         bch.iter(|| {
-            let found = detect_all(&mut detectors, 0, black_box(&shifted));
-            confirm_all(&mut detectors, 0, &boxes);
+            let found = detect_all(&mut detectors, 0, black_box(&shifted)).unwrap();
+            confirm_all(&mut detectors, 0, &boxes).unwrap();
             black_box(found)
         });
     });

@@ -34,7 +34,7 @@ use tracker_model::{
 
 use crate::boost::{BoostConfig, OnlineBooster};
 use crate::colour::ColourHistogram;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::hog::{BLOCK_LEN, BlockGrid, CELL, OrientedIntegral, Plane};
 
 /// Settings of an [`ImageDetector`].
@@ -560,19 +560,38 @@ pub fn detect_all(
     detectors: &mut [ImageDetector],
     frame: Frame,
     around: &[BoundingBox],
-) -> Vec<Option<BoundingBox>> {
-    detectors
+) -> Result<Vec<Option<BoundingBox>>> {
+    same_count(detectors, around)?;
+    Ok(detectors
         .par_iter_mut()
         .zip(around.par_iter())
         .map(|(d, a)| d.detect(frame, a))
-        .collect()
+        .collect())
+}
+
+/// One box per detector, or [`Error::BoxCount`] (a zip would silently drop the extra ones).
+fn same_count(detectors: &[ImageDetector], boxes: &[BoundingBox]) -> Result<()> {
+    if detectors.len() == boxes.len() {
+        Ok(())
+    } else {
+        Err(Error::BoxCount {
+            detectors: detectors.len(),
+            boxes: boxes.len(),
+        })
+    }
 }
 
 /// Runs `confirm` of every detector on `frame` in parallel (each learns from its own box and
 /// draws from its own random stream, so the result does not depend on the thread count).
-pub fn confirm_all(detectors: &mut [ImageDetector], frame: Frame, confirmed: &[BoundingBox]) {
+pub fn confirm_all(
+    detectors: &mut [ImageDetector],
+    frame: Frame,
+    confirmed: &[BoundingBox],
+) -> Result<()> {
+    same_count(detectors, confirmed)?;
     detectors
         .par_iter_mut()
         .zip(confirmed.par_iter())
         .for_each(|(d, b)| d.confirm(frame, b));
+    Ok(())
 }

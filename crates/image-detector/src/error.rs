@@ -34,6 +34,14 @@ pub enum Error {
         /// Why.
         reason: &'static str,
     },
+    /// `detect_all` / `confirm_all` given a different number of boxes than detectors.
+    #[error("{detectors} detectors but {boxes} boxes: one box per detector")]
+    BoxCount {
+        /// Detectors given.
+        detectors: usize,
+        /// Boxes given.
+        boxes: usize,
+    },
 }
 
 /// Result with this crate's [`Error`].

@@ -342,13 +342,13 @@ fn ten_in_parallel(threads: usize) -> Vec<Vec<Option<BoundingBox>>> {
         let mut out = Vec::new();
         for k in 1..15u32 {
             feed.set(k, draw(k as usize, &mut rng));
-            let found = crate::detect_all(&mut detectors, k, &last);
+            let found = crate::detect_all(&mut detectors, k, &last).unwrap();
             for (l, f) in last.iter_mut().zip(&found) {
                 if let Some(b) = f {
                     *l = *b;
                 }
             }
-            crate::confirm_all(&mut detectors, k, &last);
+            crate::confirm_all(&mut detectors, k, &last).unwrap();
             out.push(found);
         }
         out
@@ -361,6 +361,32 @@ fn detect_all_and_confirm_all_are_identical_with_one_and_two_threads() {
     assert_eq!(one, ten_in_parallel(2));
     // They found something (the comparison is not of ten empty lists).
     assert!(one.iter().flatten().filter(|f| f.is_some()).count() > 100);
+}
+
+#[test]
+fn detect_all_and_confirm_all_need_one_box_per_detector() {
+    let feed = FrameFeed::new();
+    let mut factory = ImageDetectors::new(DetectorConfig::default(), feed, 1).unwrap();
+    let b = BoundingBox::new(10.0, 10.0, 24.0, 60.0).unwrap();
+    let mut detectors = vec![factory.detector(0, &b).unwrap()];
+    for boxes in [vec![], vec![b, b]] {
+        let want = crate::Error::BoxCount {
+            detectors: 1,
+            boxes: boxes.len(),
+        };
+        assert_eq!(
+            crate::detect_all(&mut detectors, 1, &boxes)
+                .unwrap_err()
+                .to_string(),
+            want.to_string()
+        );
+        assert_eq!(
+            crate::confirm_all(&mut detectors, 1, &boxes)
+                .unwrap_err()
+                .to_string(),
+            want.to_string()
+        );
+    }
 }
 
 #[test]

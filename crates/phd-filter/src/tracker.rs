@@ -14,19 +14,25 @@ use crate::smc::{Estimate, PhdStep};
 
 /// A PHD filter over boxes: one frame of detections in, estimates out.
 pub trait PhdFilter {
-    /// Runs one frame.
-    fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep>;
+    /// Runs the frame `frames` frames after the last one (the frames between hold no
+    /// detection; one prediction by the exact multi-frame transition).
+    fn step_after(&mut self, frames: u64, boxes: &[BoundingBox]) -> Result<PhdStep>;
+
+    /// Runs the next frame.
+    fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        self.step_after(1, boxes)
+    }
 }
 
 impl PhdFilter for crate::smc::SmcPhd {
-    fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
-        crate::smc::SmcPhd::step(self, boxes)
+    fn step_after(&mut self, frames: u64, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        crate::smc::SmcPhd::step_after(self, frames, boxes)
     }
 }
 
 impl PhdFilter for crate::gm::GmPhd {
-    fn step(&mut self, boxes: &[BoundingBox]) -> Result<PhdStep> {
-        crate::gm::GmPhd::step(self, boxes)
+    fn step_after(&mut self, frames: u64, boxes: &[BoundingBox]) -> Result<PhdStep> {
+        crate::gm::GmPhd::step_after(self, frames, boxes)
     }
 }
 
@@ -92,8 +98,20 @@ impl<F: PhdFilter, D: LocalDetectorFactory> PhdTracker<F, D> {
         &self.bank
     }
 
-    /// Processes one frame of global detections.
+    /// Processes one frame of global detections: the frame after the last one processed.
     pub fn step(&mut self, frame: Frame, global: &[BoundingBox]) -> Result<FrameOutput> {
+        self.step_after(1, frame, global)
+    }
+
+    /// Processes the global detections of `frame`, `frames` frames after the last one
+    /// processed (a sequence with missing frame numbers, such as a subsampled image folder:
+    /// the filter jumps the frames between in one prediction, [`PhdFilter::step_after`]).
+    pub fn step_after(
+        &mut self,
+        frames: u64,
+        frame: Frame,
+        global: &[BoundingBox],
+    ) -> Result<FrameOutput> {
         let found = if self.factory.is_some() {
             let found = self.bank.detect(frame);
             self.bank.suppress_duplicates(found, self.fusion.fuse_iou)
@@ -105,7 +123,7 @@ impl<F: PhdFilter, D: LocalDetectorFactory> PhdTracker<F, D> {
             .into_iter()
             .map(|(b, _)| b)
             .collect();
-        let step = self.filter.step(&observations)?;
+        let step = self.filter.step_after(frames, &observations)?;
         if let Some(factory) = self.factory.as_mut() {
             let labels: Vec<u64> = step.estimates.iter().map(|e| e.label).collect();
             for e in &step.estimates {

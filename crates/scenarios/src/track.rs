@@ -417,9 +417,9 @@ impl TrackConfig {
             .context("in the [phd_labels] table of the configuration")?;
         let mut gnn = self.gnn;
         if gnn.max_gap.is_none() && self.fit.iterations > 0 && !boxes.is_empty() {
-            // GNN deletes after one box width of travel, half of MCMCDA's fitted d̄.
-            gnn.max_gap =
-                Some(((f64::from(model_base.max_gap) / GAP_BOX_WIDTHS).round() as u32).max(1));
+            // GNN deletes after one box width of travel, half of MCMCDA's d̄ (the fitted one,
+            // or the user's `[model] max_gap`).
+            gnn.max_gap = Some(((f64::from(model.max_gap) / GAP_BOX_WIDTHS).round() as u32).max(1));
         }
         let score_model = fit_scores(&model, rows, &self.fit, &gnn, &self.scores)?;
         Ok(EffectiveConfig {
@@ -1117,9 +1117,11 @@ impl OfflineConfig {
         if self.min_samples == 0 && self.samples_per_detection == 0 {
             bail!("min_samples = samples_per_detection = 0: the chain would never move");
         }
-        if !(self.link_gap_factor.is_finite() && self.link_gap_factor >= 0.0) {
+        // At most 100 × d̄ (d̄ ≤ 64 frames): a link's bridged frames are output boxes, so the
+        // factor bounds what one gap in the frame numbers can cost.
+        if !(self.link_gap_factor.is_finite() && (0.0..=100.0).contains(&self.link_gap_factor)) {
             bail!(
-                "link_gap_factor = {}; it must be finite and ≥ 0",
+                "link_gap_factor = {}; it must be in [0, 100]",
                 self.link_gap_factor
             );
         }
@@ -1374,8 +1376,9 @@ pub fn fit_scores(
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
             (a.min(s), b.max(s))
         });
-    // Also false for NaN bounds (no finite score at all).
-    let varies = hi - lo > 1e-9 * hi.abs().max(1.0);
+    // Also false for NaN bounds (no finite score at all) and for a span beyond f64 (scores
+    // near ±1.8e308: the grid's step would be infinite and every density NaN).
+    let varies = (hi - lo).is_finite() && hi - lo > 1e-9 * hi.abs().max(1.0);
     if !varies {
         return Ok(None);
     }
@@ -1405,10 +1408,16 @@ pub fn fit_scores(
     }
     let step = (hi - lo) / (SCORE_GRID - 1) as f64;
     let grid: Vec<f64> = (0..SCORE_GRID).map(|i| lo + step * i as f64).collect();
-    let density = |v: &[f64]| -> Vec<f64> {
+    // Size, mean and sample standard deviation.
+    let moments = |v: &[f64]| {
         let n = v.len() as f64;
         let mean = v.iter().sum::<f64>() / n;
         let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+        (v.len(), mean, sd)
+    };
+    let density = |v: &[f64]| -> Vec<f64> {
+        let (_, _, sd) = moments(v);
+        let n = v.len() as f64;
         let mut sorted = v.to_vec();
         sorted.sort_by(f64::total_cmp);
         let iqr = sorted[sorted.len() * 3 / 4] - sorted[sorted.len() / 4];
@@ -1433,12 +1442,6 @@ pub fn fit_scores(
         .zip(&f0)
         .map(|(a, b)| (a.ln() - b.ln()).clamp(-bound, bound))
         .collect();
-    let moments = |v: &[f64]| {
-        let n = v.len() as f64;
-        let mean = v.iter().sum::<f64>() / n;
-        let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        (v.len(), mean, sd)
-    };
     Ok(Some(ScoreModel {
         lo,
         hi,
@@ -1651,12 +1654,20 @@ fn gnn_online_output(
                 (d.frame, d.bbox)
             })
             .collect();
-        // The causal fit at each detection's frame.
+        // The causal fit at each detection's frame, from the detections within the kernel's
+        // reach before it (all the fit reads: the track's detection at f is the slice's last),
+        // so a track costs O(length · reach), not O(length²).
+        let reach = kernel_reach(boxes.smoothing_frames);
         let mut fitted: Vec<(Frame, BoundingBox)> = Vec::with_capacity(dets.len());
-        for &(f, _) in &dets {
-            if let Some(tracker_model::Location::Box(b)) = smooth_boxes(&dets, boxes, Some(f))?
-                .last()
-                .map(|p| p.location)
+        let mut start = 0;
+        for (k, &(f, _)) in dets.iter().enumerate() {
+            while i64::from(dets[start].0) < i64::from(f).saturating_sub(reach) {
+                start += 1;
+            }
+            if let Some(tracker_model::Location::Box(b)) =
+                smooth_boxes(&dets[start..=k], boxes, Some(f))?
+                    .last()
+                    .map(|p| p.location)
             {
                 fitted.push((f, b));
             }
@@ -1750,6 +1761,12 @@ fn track_online(
     Ok(TrackSet::from_tracks(tracks)?)
 }
 
+/// Frames on either side whose detections the box kernel of width σ reads: 3σ, rounded up
+/// (saturating, so a huge σ reads the whole track instead of overflowing).
+fn kernel_reach(sigma: f64) -> i64 {
+    (3.0 * sigma).ceil() as i64
+}
+
 /// Boxes of a track from its detections `dets` (frame, box; frames strictly increasing): at
 /// every frame from the first detection to the last (or to `until`, when given: the fit then
 /// uses only the detections up to it and outputs that one frame), each edge is a local-linear
@@ -1769,7 +1786,7 @@ pub fn smooth_boxes(
         return Ok(Vec::new());
     };
     let sigma = config.smoothing_frames;
-    let reach = (3.0 * sigma).ceil() as i64;
+    let reach = kernel_reach(sigma);
     let e = i64::from(config.extrapolate_frames);
     let frames: Vec<i64> = match until {
         Some(u) => vec![i64::from(u)],
@@ -1781,7 +1798,7 @@ pub fn smooth_boxes(
     let mut out = Vec::with_capacity(frames.len());
     let mut lo = 0usize;
     for f in frames {
-        while lo < dets.len() && i64::from(dets[lo].0) < f - reach {
+        while lo < dets.len() && i64::from(dets[lo].0) < f.saturating_sub(reach) {
             lo += 1;
         }
         // Weighted sums for the local-linear fit of each edge: Σw, Σw·x, Σw·x², Σw·y, Σw·x·y.
@@ -1790,7 +1807,7 @@ pub fn smooth_boxes(
         let mut n = 0usize;
         for &(g, b) in dets[lo..]
             .iter()
-            .take_while(|d| i64::from(d.0) <= f + reach)
+            .take_while(|d| i64::from(d.0) <= f.saturating_add(reach))
         {
             let x = (i64::from(g) - f) as f64;
             let w = (-0.5 * (x / sigma).powi(2)).exp();
@@ -2512,6 +2529,11 @@ mod tests {
         );
         let err = error_of("[phd_labels]\nmin_iou = nan\n", Tracker::Mcmcda);
         assert!(err.contains("min_iou"), "{err}");
+        let err = error_of("[offline]\nlink_gap_factor = 1e9\n", Tracker::Mcmcda);
+        assert!(
+            err.contains("[offline]") && err.contains("link_gap_factor"),
+            "{err}"
+        );
         for key in ["extrapolate_frames", "online_coast_frames"] {
             let err = error_of(&format!("[boxes]\n{key} = 4000000000\n"), Tracker::Gnn);
             assert!(err.contains("[boxes]") && err.contains(key), "{err}");
@@ -2530,5 +2552,21 @@ mod tests {
         .unwrap();
         assert!(tracks.n_points() <= 7, "{}", tracks.n_points());
         assert!(start.elapsed().as_secs() < 5);
+        // A gap of 10 frames within max_misses: both walkers' confirmed tracks coast through
+        // it with one box a frame (kept, since each walker is found again after it); with
+        // max_misses = 8 (the default) they end at the gap instead.
+        let rows = walker_with_a_gap(11..=20);
+        let coasted = |max_misses: u32| {
+            let text = format!("[phd_labels]\nmax_misses = {max_misses}\nmin_mass = 0.0\n");
+            let tracks = track_detections(Tracker::Phd, &rows, &config(&text), 3).unwrap();
+            tracks
+                .tracks()
+                .iter()
+                .flat_map(|t| t.points())
+                .filter(|p| (11..=20).contains(&p.frame))
+                .count()
+        };
+        assert_eq!(coasted(12), 20);
+        assert_eq!(coasted(8), 0);
     }
 }

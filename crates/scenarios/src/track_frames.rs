@@ -6,7 +6,8 @@
 //!
 //! The frames are the PNG (or PGM/PPM) files of a folder, ordered by the frame number in their
 //! file name (the last run of digits, so MOTChallenge's `img1/000001.png` is frame 1), decoded
-//! with sensors-video's [`sensors_video::io::decode_image`]. Every image is one filter step;
+//! with sensors-video's [`sensors_video::io::decode_image`]. Every image is one filter step
+//! (a gap in the images' frame numbers is jumped in one prediction, as without images);
 //! each frame's global detections are the detection file's rows with that frame number, and a
 //! frame with an image but no detection is stepped with the local detectors alone. Only the
 //! image headers are read up front (to check that the sizes agree); each picture is decoded when
@@ -381,13 +382,18 @@ pub fn track_frames(
     for r in rows {
         by_frame.entry(r.frame).or_default().push(r.bbox);
     }
+    let mut previous: Option<Frame> = None;
     for frame in folder.frames() {
         // `load` returns Some for every frame `frames` lists.
         if let Some(image) = folder.load(frame)? {
             feed.set(frame, Arc::new(image));
         }
         let boxes = by_frame.get(&frame).map_or(&[][..], Vec::as_slice);
-        tracker.step(frame, boxes)?;
+        // Missing frame numbers (a subsampled folder) are time passing: one prediction over
+        // them, as `--tracker phd` without images does. The frames are in increasing order.
+        let frames = previous.map_or(1, |p| u64::from(frame - p));
+        tracker.step_after(frames, frame, boxes)?;
+        previous = Some(frame);
     }
     Ok(tracker.tracks()?)
 }

@@ -128,7 +128,10 @@ fn measure_track(tracker: Tracker, text: &str) -> (usize, f64, usize) {
 /// Tracks `n_objects × n_frames` rows on consecutive frames and the same rows in bursts over a
 /// span 1000 times larger; checks the memory budget per row and that the spread-out file costs
 /// no more.
-#[expect(clippy::print_stderr, reason = "the measurements are the test's record")]
+#[expect(
+    clippy::print_stderr,
+    reason = "the measurements are the test's record"
+)]
 fn track_by_rows_not_by_frame_span(tracker: Tracker, n_objects: u64, n_frames: u64) {
     let rows = (n_objects * n_frames) as f64;
     let text = detections(n_objects, n_frames, false);
@@ -147,7 +150,6 @@ fn track_by_rows_not_by_frame_span(tracker: Tracker, n_objects: u64, n_frames: u
         sparse_peak as f64 / rows,
         1e6 * sparse_s / rows,
     );
-    // The walkers are tracked on consecutive frames (nearly every row in a track).
     // The walkers are tracked (nearly every row in a track), in the bursts too.
     assert!(
         dense_points as f64 > 0.9 * rows,
