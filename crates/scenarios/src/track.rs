@@ -1637,7 +1637,8 @@ fn link_tracklets(
 /// for at most `coast` frames after ℓ (`[boxes] online_coast_frames`, at most GNN's deletion
 /// gap, after which GNN deletes the track) and not beyond the
 /// file's last frame `end`. The first box of a track is its first detection (a track holds its
-/// initiating detections, as the peer's trackers do).
+/// initiating detections, as the peer's trackers do): causal up to confirmation, since whether
+/// a track is output at all is decided by its M-of-N confirmation, which may come after f.
 fn gnn_online_output(
     detections: &[MotRow],
     tracks: &[Vec<MeasId>],
