@@ -56,6 +56,8 @@ pub struct Problem {
     /// forward[m·d̄ + d − 1] = L(y_m, t_m, d); backward likewise for scan t_m − d.
     forward: Vec<Vec<MeasId>>,
     backward: Vec<Vec<MeasId>>,
+    /// Reused by [`Self::add_measurement`] (holds nothing between calls).
+    scratch: Vec<MeasId>,
 }
 
 impl Problem {
@@ -76,6 +78,7 @@ impl Problem {
             members: Vec::new(),
             forward: Vec::new(),
             backward: Vec::new(),
+            scratch: Vec::new(),
         }
     }
 
@@ -179,31 +182,37 @@ impl Problem {
         let d_bar = self.max_gap;
         self.forward.extend((0..d_bar).map(|_| Vec::new()));
         self.backward.extend((0..d_bar).map(|_| Vec::new()));
+        // One reused buffer for the neighbours found at each gap (no allocation per gap).
+        let mut found = std::mem::take(&mut self.scratch);
         for d in 1..=d_bar {
-            let later: Vec<MeasId> = self
-                .scan(scan + d)
-                .iter()
-                .copied()
-                .filter(|&other| self.within(id, other, d))
-                .collect();
-            for other in later {
-                self.forward[slot * d_bar + d - 1].push(other);
+            found.clear();
+            found.extend(
+                self.scan(scan + d)
+                    .iter()
+                    .copied()
+                    .filter(|&other| self.within(id, other, d)),
+            );
+            self.forward[slot * d_bar + d - 1].extend_from_slice(&found);
+            for &other in &found {
                 let other = self.slot(other);
                 self.backward[other * d_bar + d - 1].push(id);
             }
-            let earlier: Vec<MeasId> = scan
-                .checked_sub(d)
-                .map_or(&[][..], |s| self.scan(s))
-                .iter()
-                .copied()
-                .filter(|&other| self.within(id, other, d))
-                .collect();
-            for other in earlier {
-                self.backward[slot * d_bar + d - 1].push(other);
+            found.clear();
+            found.extend(
+                scan.checked_sub(d)
+                    .map_or(&[][..], |s| self.scan(s))
+                    .iter()
+                    .copied()
+                    .filter(|&other| self.within(id, other, d)),
+            );
+            // The new measurement's own lists are filled in one go, not push by push.
+            self.backward[slot * d_bar + d - 1].extend_from_slice(&found);
+            for &other in &found {
                 let other = self.slot(other);
                 self.forward[other * d_bar + d - 1].push(id);
             }
         }
+        self.scratch = found;
         let at = self.held.partition_point(|&s| (s as usize) < scan);
         if self.held.get(at) == Some(&(scan as u32)) {
             self.members[at].push(id);

@@ -13,13 +13,71 @@ use crate::config::Move;
 use crate::partition::{FREE, OUTSIDE, Partition};
 use crate::problem::MeasId;
 
-/// log Σ exp(x_i), ignoring −∞ terms.
-fn log_sum_exp(terms: &[f64]) -> f64 {
-    let max = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    if max == f64::NEG_INFINITY {
-        return max;
+/// A running log Σ exp(x_i) (−∞ terms ignored), so that the terms need no buffer.
+#[derive(Default)]
+struct LogSumExp {
+    /// The largest term so far (None before the first finite one).
+    max: Option<f64>,
+    /// Σ exp(x_i − max).
+    sum: f64,
+}
+
+impl LogSumExp {
+    fn add(&mut self, x: f64) {
+        if x == f64::NEG_INFINITY {
+            return;
+        }
+        match self.max {
+            Some(m) if x <= m => self.sum += (x - m).exp(),
+            Some(m) => {
+                self.sum = self.sum * (m - x).exp() + 1.0;
+                self.max = Some(x);
+            }
+            None => {
+                self.max = Some(x);
+                self.sum = 1.0;
+            }
+        }
     }
-    max + terms.iter().map(|t| (t - max).exp()).sum::<f64>().ln()
+
+    fn value(&self) -> f64 {
+        self.max.map_or(f64::NEG_INFINITY, |m| m + self.sum.ln())
+    }
+}
+
+/// A track's measurements in growth order: as stored (tail moves) or reversed (head moves),
+/// without copying.
+#[derive(Clone, Copy)]
+struct Ordered<'a> {
+    meas: &'a [MeasId],
+    reversed: bool,
+}
+
+impl<'a> Ordered<'a> {
+    fn new(meas: &'a [MeasId], reversed: bool) -> Self {
+        Self { meas, reversed }
+    }
+
+    fn len(&self) -> usize {
+        self.meas.len()
+    }
+
+    /// The measurement at growth position `i` (0-based).
+    fn get(&self, i: usize) -> MeasId {
+        if self.reversed {
+            self.meas[self.meas.len() - 1 - i]
+        } else {
+            self.meas[i]
+        }
+    }
+}
+
+/// ln n, tabulated for the small counts that candidate sets have (the same values as
+/// `(n as f64).ln()`, which is used beyond the table).
+fn ln_count(n: usize) -> f64 {
+    static TABLE: std::sync::LazyLock<[f64; 256]> =
+        std::sync::LazyLock::new(|| std::array::from_fn(|n| (n as f64).ln()));
+    TABLE.get(n).copied().unwrap_or_else(|| (n as f64).ln())
 }
 
 /// Which end of a track a move grows or cuts: the paper's moves act on the tail; the head
@@ -164,7 +222,7 @@ impl Partition<'_> {
             if !self.problem.within(y, next, d) {
                 return f64::NEG_INFINITY;
             }
-            lp += self.model.log_zeta[d - 1] - (self.free_neighbour_count(y, d, end) as f64).ln();
+            lp += self.model.log_zeta[d - 1] - ln_count(self.free_neighbour_count(y, d, end));
             y = next;
         }
         lp + self.log_stop_at(y, end)
@@ -296,46 +354,96 @@ impl Partition<'_> {
         to: &[MeasId],
     ) -> f64 {
         let head = self.model.config.head_probability;
-        let mut terms = Vec::new();
+        let mut sum = LogSumExp::default();
         if head < 1.0 {
-            let tail_terms = self.one_end_terms(k, from, to, End::Tail);
-            terms.extend(tail_terms.into_iter().map(|t| t + (-head).ln_1p()));
+            let (from, to) = (Ordered::new(from, false), Ordered::new(to, false));
+            self.one_end_terms(k, from, to, End::Tail, (-head).ln_1p(), &mut sum);
         }
         if head > 0.0 {
-            let rev = |v: &[MeasId]| v.iter().rev().copied().collect::<Vec<_>>();
-            let head_terms = self.one_end_terms(k, &rev(from), &rev(to), End::Head);
-            terms.extend(head_terms.into_iter().map(|t| t + head.ln()));
+            let (from, to) = (Ordered::new(from, true), Ordered::new(to, true));
+            self.one_end_terms(k, from, to, End::Head, head.ln(), &mut sum);
         }
-        log_sum_exp(&terms) - (k as f64).ln()
+        sum.value() - (k as f64).ln()
     }
 
-    /// The log-probability terms of producing `to` from `from` at one end, given that end was
-    /// chosen and the track drawn; both sequences are in growth order from the kept end.
-    fn one_end_terms(&self, k: usize, from: &[MeasId], to: &[MeasId], end: End) -> Vec<f64> {
+    /// Adds to `sum` the log-probability terms (each plus `offset`) of producing `to` from
+    /// `from` at one end, given that end was chosen and the track drawn; both sequences are
+    /// in growth order from the kept end.
+    ///
+    /// Every term is a growth probability of a suffix of `to` (from `to[r − 1]` on), and a
+    /// growth probability is a sum of per-step terms (go on, ζ(d)/|C|) plus the stop at the
+    /// last measurement, each step depending only on its own edge and the free set. So the
+    /// steps are evaluated once, from the far end, and the terms read off the running suffix
+    /// sum: O(|τ'|) per proposal instead of O(|τ'|²), which dominated long tracks (the same
+    /// value as [`Partition::log_grow_probability`] of each suffix, summed in another order).
+    fn one_end_terms(
+        &self,
+        k: usize,
+        from: Ordered<'_>,
+        to: Ordered<'_>,
+        end: End,
+        offset: f64,
+        sum: &mut LogSumExp,
+    ) {
         let xi = |m| self.model.move_probability(m, k);
-        let common = from.iter().zip(to).take_while(|(a, b)| a == b).count();
-        let mut terms: Vec<f64> = Vec::with_capacity(common + 2);
-        if to.len() > from.len() && common == from.len() {
-            terms.push(
-                xi(Move::Extension).ln()
-                    + self.log_grow_probability(
-                        from[common - 1],
-                        end,
-                        &to[common..],
-                        FirstStep::MayStop,
-                    ),
-            );
+        let (n_from, n_to) = (from.len(), to.len());
+        let common = (0..n_from.min(n_to))
+            .take_while(|&i| from.get(i) == to.get(i))
+            .count();
+        let extension = n_to > n_from && common == n_from;
+        if from.len() >= 3 && n_to >= 2 && n_to < n_from && common == n_to {
+            sum.add(offset + xi(Move::Reduction).ln() - ln_count(n_from - 2));
         }
-        if from.len() >= 3 && to.len() >= 2 && to.len() < from.len() && common == to.len() {
-            terms.push(xi(Move::Reduction).ln() - ((from.len() - 2) as f64).ln());
+        if common == 0 {
+            // Neither an update (it keeps at least one measurement) nor an extension.
+            return;
         }
-        let log_update = xi(Move::Update).ln() - (from.len() as f64).ln();
-        for r in 1..=common.min(from.len()) {
-            terms.push(
-                log_update
-                    + self.log_grow_probability(to[r - 1], end, &to[r..], FirstStep::of_update(r)),
-            );
+        let stop = self.log_stop_at(to.get(n_to - 1), end);
+        let log_update = offset + xi(Move::Update).ln() - ln_count(n_from);
+        let log_extension = offset + xi(Move::Extension).ln();
+        let go_on = self.model.log_go_on;
+        // acc = Σ_{j ≥ r} (go on + step j), the edges to[j − 1] → to[j]; r runs down from
+        // |τ'|. Update from r keeps to[..r] (r ≤ common); its first step is mandatory (no
+        // go-on factor, and an empty tail impossible) when r = 1. Extension grows from
+        // r = common = |τ|.
+        let mut acc = 0.0;
+        for r in (1..=n_to).rev() {
+            if r < n_to {
+                acc += go_on + self.log_grow_step(to.get(r - 1), to.get(r), end);
+            }
+            if extension && r == common {
+                sum.add(log_extension + acc + stop);
+            }
+            if r <= common.min(n_from) {
+                let grow = match r {
+                    1 if n_to < 2 => f64::NEG_INFINITY,
+                    1 => acc - go_on + stop,
+                    _ => acc + stop,
+                };
+                sum.add(log_update + grow);
+            }
         }
-        terms
+    }
+
+    /// log of one growth step `y → next` towards `end` (ζ(d)/|C(d)|, the go-on factor
+    /// apart), −∞ if growth cannot make it in this partition.
+    fn log_grow_step(&self, y: MeasId, next: MeasId, end: End) -> f64 {
+        let (t, t_next) = (self.problem.scan_of(y), self.problem.scan_of(next));
+        let (earlier, later) = match end {
+            End::Tail => (t, t_next),
+            End::Head => (t_next, t),
+        };
+        if later <= earlier
+            || later - earlier > self.problem.max_gap()
+            || !self.is_free(next)
+            || (end == End::Head && earlier < self.lo)
+        {
+            return f64::NEG_INFINITY;
+        }
+        let d = later - earlier;
+        if !self.problem.within(y, next, d) {
+            return f64::NEG_INFINITY;
+        }
+        self.model.log_zeta[d - 1] - ln_count(self.free_neighbour_count(y, d, end))
     }
 }

@@ -1604,3 +1604,148 @@ fn scored_incremental_posterior_matches_the_counts_under_every_move() {
         assert!((fresh - state.log_posterior()).abs() < 1e-8 * fresh.abs().max(1.0));
     }
 }
+
+/// log q of a single-track move the long way (one growth probability per kept prefix, as
+/// in the paper's definition): the route the sampler's suffix sums must equal.
+fn single_track_q_by_prefixes(state: &Partition<'_>, k: usize, from: &[u32], to: &[u32]) -> f64 {
+    use crate::proposal::{End, FirstStep};
+    let xi = |m| state.model.move_probability(m, k);
+    let head = state.model.config.head_probability;
+    let mut terms = Vec::new();
+    for (end, weight) in [(End::Tail, 1.0 - head), (End::Head, head)] {
+        if weight <= 0.0 {
+            continue;
+        }
+        let order = |v: &[u32]| -> Vec<u32> {
+            match end {
+                End::Tail => v.to_vec(),
+                End::Head => v.iter().rev().copied().collect(),
+            }
+        };
+        let (from, to) = (order(from), order(to));
+        let common = from.iter().zip(&to).take_while(|(a, b)| a == b).count();
+        let w = weight.ln();
+        if to.len() > from.len() && common == from.len() {
+            terms.push(
+                w + xi(Move::Extension).ln()
+                    + state.log_grow_probability(
+                        from[common - 1],
+                        end,
+                        &to[common..],
+                        FirstStep::MayStop,
+                    ),
+            );
+        }
+        if from.len() >= 3 && to.len() >= 2 && to.len() < from.len() && common == to.len() {
+            terms.push(w + xi(Move::Reduction).ln() - ((from.len() - 2) as f64).ln());
+        }
+        for r in 1..=common.min(from.len()) {
+            terms.push(
+                w + xi(Move::Update).ln() - (from.len() as f64).ln()
+                    + state.log_grow_probability(to[r - 1], end, &to[r..], FirstStep::of_update(r)),
+            );
+        }
+    }
+    let max = terms.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    if max == f64::NEG_INFINITY {
+        return max;
+    }
+    max + terms.iter().map(|t| (t - max).exp()).sum::<f64>().ln() - (k as f64).ln()
+}
+
+#[test]
+fn single_track_q_by_suffix_sums_equals_the_sum_over_prefixes() {
+    use crate::proposal::{End, FirstStep};
+    use rand::RngExt;
+    // Four walkers close together over 25 scans with misses and clutter, so that candidate
+    // sets hold several free measurements and growth can go astray.
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let mut truth: Vec<Vec<u32>> = vec![Vec::new(); 4];
+    let mut id = 0u32;
+    let scans: Vec<Scan> = (0..25u32)
+        .map(|f| {
+            let t = f64::from(f);
+            let mut points = Vec::new();
+            for (w, track) in truth.iter_mut().enumerate() {
+                if rng.random_bool(0.8) {
+                    let w = w as f64;
+                    points.push((50.0 * w + 6.0 * t, 40.0 * w + (w - 1.5) * 4.0 * t));
+                    track.push(id);
+                    id += 1;
+                }
+            }
+            for _ in 0..rng.random_range(0..3) {
+                points.push((rng.random_range(0.0..300.0), rng.random_range(0.0..300.0)));
+                id += 1;
+            }
+            scan(f, &points)
+        })
+        .collect();
+    for head_probability in [0.0, 0.3, 1.0] {
+        let model = McmcdaConfig {
+            max_speed: 30.0,
+            max_gap: 4,
+            head_probability,
+            ..McmcdaConfig::default()
+        }
+        .check()
+        .unwrap();
+        let problem = Problem::from_scans(&model, &scans).unwrap();
+        let window = problem.all_scans().unwrap();
+        let start = Partition::from_tracks(&model, &problem, window, &truth).unwrap();
+        let (mut compared, mut finite) = (0, 0);
+        for k in 0..start.n_tracks() {
+            let mut state = start.clone();
+            let old = state.remove(k);
+            let from = old.meas.clone();
+            for _ in 0..60 {
+                // A proposal's new track: keep a random prefix at a random end and regrow.
+                let end = if rng.random_bool(0.5) {
+                    End::Tail
+                } else {
+                    End::Head
+                };
+                let mut order = from.clone();
+                if end == End::Head {
+                    order.reverse();
+                }
+                let r = rng.random_range(1..=order.len());
+                let mut to = order[..r].to_vec();
+                let mut buffer = Vec::new();
+                state.grow(
+                    order[r - 1],
+                    end,
+                    FirstStep::of_update(r),
+                    &mut to,
+                    &mut buffer,
+                    &mut rng,
+                );
+                if end == End::Head {
+                    to.reverse();
+                }
+                if to.len() < 2 {
+                    continue;
+                }
+                let n_tracks = start.n_tracks();
+                for (a, b) in [(&from, &to), (&to, &from)] {
+                    let fast = state.log_single_track_probability(n_tracks, a, b);
+                    let slow = single_track_q_by_prefixes(&state, n_tracks, a, b);
+                    compared += 1;
+                    if slow.is_finite() {
+                        finite += 1;
+                        assert!(
+                            (fast - slow).abs() < 1e-9 * slow.abs().max(1.0),
+                            "{a:?} -> {b:?}: {fast} vs {slow}"
+                        );
+                    } else {
+                        assert!(
+                            fast == f64::NEG_INFINITY && slow == f64::NEG_INFINITY,
+                            "{a:?} -> {b:?}: {fast} vs {slow}"
+                        );
+                    }
+                }
+            }
+        }
+        assert!(finite > 100, "{finite} of {compared} comparisons finite");
+    }
+}
