@@ -11,9 +11,8 @@
 //!   `frame,left,top,width,height` per frame (empty fields when it found nothing) and, last,
 //!   `# ms_per_frame MEDIAN MEAN` over frames 1.. (search and update only, not the PNG decode).
 //!
-//! The drawing code repeats `src/tests.rs`'s `background`, `draw_sprite`, `frame` and
-//! `wandering_path` (the seed and the order of draws are the same, so the pictures are those of
-//! the test).
+//! The pictures come from `image_detector::scene`, as the test's do (same seed, same order of
+//! draws).
 #![expect(
     clippy::unwrap_used,
     clippy::print_stdout,
@@ -23,84 +22,18 @@
 use std::sync::Arc;
 use std::time::Instant;
 
-use image::{Rgb, RgbImage};
+use image_detector::scene::{background, noisy_frame as frame, wandering_path};
 use image_detector::{DetectorConfig, FrameFeed, ImageDetectors};
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use tracker_model::{BoundingBox, LocalDetector};
+use tracker_model::LocalDetector;
 
 const SEED: u64 = 11;
 const FRAMES: usize = 200;
 
-fn background(w: u32, h: u32, rng: &mut ChaCha8Rng) -> RgbImage {
-    let mut im = RgbImage::from_pixel(w, h, Rgb([110, 120, 100]));
-    for _ in 0..120 {
-        let (x0, y0) = (rng.random_range(0..w), rng.random_range(0..h));
-        let (rw, rh) = (rng.random_range(4..30), rng.random_range(4..30));
-        let c = Rgb([rng.random::<u8>(), rng.random::<u8>(), rng.random::<u8>()]);
-        for y in y0..(y0 + rh).min(h) {
-            for x in x0..(x0 + rw).min(w) {
-                im.put_pixel(x, y, c);
-            }
-        }
-    }
-    im
-}
-
-fn draw_sprite(im: &mut RgbImage, b: &BoundingBox) {
-    let (w, h) = (im.width() as i64, im.height() as i64);
-    for y in b.top.floor() as i64..b.bottom().ceil() as i64 {
-        for x in b.left.floor() as i64..b.right().ceil() as i64 {
-            if x < 0 || y < 0 || x >= w || y >= h {
-                continue;
-            }
-            let v = (y as f64 - b.top) / b.height;
-            let u = (x as f64 - b.left) / b.width;
-            let c = if v < 0.18 {
-                if (u - 0.5).abs() < 0.25 {
-                    Rgb([230, 190, 160])
-                } else {
-                    continue;
-                }
-            } else if v < 0.55 {
-                if ((v * 20.0) as i64) % 2 == 0 {
-                    Rgb([30, 60, 200])
-                } else {
-                    Rgb([240, 240, 60])
-                }
-            } else if (u - 0.5).abs() < 0.08 {
-                continue;
-            } else {
-                Rgb([40, 30, 30])
-            };
-            im.put_pixel(x as u32, y as u32, c);
-        }
-    }
-}
-
-fn frame(bg: &RgbImage, b: &BoundingBox, rng: &mut ChaCha8Rng) -> RgbImage {
-    let mut im = bg.clone();
-    draw_sprite(&mut im, b);
-    for p in im.pixels_mut() {
-        for c in &mut p.0 {
-            *c = (f64::from(*c) + rng.random_range(-8.0..8.0)).clamp(0.0, 255.0) as u8;
-        }
-    }
-    im
-}
-
-fn wandering_path(n: usize) -> Vec<BoundingBox> {
-    (0..n)
-        .map(|k| {
-            let t = k as f64;
-            BoundingBox::new(60.0 + 1.0 * t, 90.0 + 25.0 * (t / 30.0).sin(), 24.0, 60.0).unwrap()
-        })
-        .collect()
-}
-
 fn write(dir: &str, seed: u64) {
     std::fs::create_dir_all(dir).unwrap();
-    let path = wandering_path(FRAMES);
+    let path = wandering_path(FRAMES).unwrap();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let bg = background(320, 240, &mut rng);
     let mut truth = String::new();
@@ -117,7 +50,7 @@ fn write(dir: &str, seed: u64) {
 }
 
 fn track(dir: &str) {
-    let path = wandering_path(FRAMES);
+    let path = wandering_path(FRAMES).unwrap();
     let load = |k: usize| image::open(format!("{dir}/{k:06}.png")).unwrap().to_rgb8();
     let feed = FrameFeed::new();
     let mut factory = ImageDetectors::new(DetectorConfig::default(), feed.clone(), SEED).unwrap();

@@ -52,6 +52,7 @@ pub mod colour;
 mod detector;
 mod error;
 pub mod hog;
+pub mod scene;
 
 #[cfg(test)]
 mod tests;

@@ -1,11 +1,11 @@
 use std::sync::Arc;
 
-use image::{Rgb, RgbImage};
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use tracker_model::{BoundingBox, LocalDetector};
 
 use crate::hog::{BINS, BlockGrid, CellGrid, Plane};
+use crate::scene::{background, draw_sprite, noisy_frame as frame, wandering_path};
 use crate::{
     BoostConfig, ColourHistogram, DetectorConfig, FrameFeed, ImageDetectors, OnlineBooster,
 };
@@ -180,66 +180,6 @@ fn bad_configs_are_errors() {
     assert!(ImageDetectors::new(d, FrameFeed::new(), 0).is_err());
 }
 
-/// A cluttered background: random coloured rectangles and stripes.
-fn background(w: u32, h: u32, rng: &mut ChaCha8Rng) -> RgbImage {
-    let mut im = RgbImage::from_pixel(w, h, Rgb([110, 120, 100]));
-    for _ in 0..120 {
-        let (x0, y0) = (rng.random_range(0..w), rng.random_range(0..h));
-        let (rw, rh) = (rng.random_range(4..30), rng.random_range(4..30));
-        let c = Rgb([rng.random::<u8>(), rng.random::<u8>(), rng.random::<u8>()]);
-        for y in y0..(y0 + rh).min(h) {
-            for x in x0..(x0 + rw).min(w) {
-                im.put_pixel(x, y, c);
-            }
-        }
-    }
-    im
-}
-
-/// A textured person-like sprite (head, striped shirt, trousers) drawn at box `b`.
-fn draw_sprite(im: &mut RgbImage, b: &BoundingBox) {
-    let (w, h) = (im.width() as i64, im.height() as i64);
-    for y in b.top.floor() as i64..b.bottom().ceil() as i64 {
-        for x in b.left.floor() as i64..b.right().ceil() as i64 {
-            if x < 0 || y < 0 || x >= w || y >= h {
-                continue;
-            }
-            let v = (y as f64 - b.top) / b.height;
-            let u = (x as f64 - b.left) / b.width;
-            let c = if v < 0.18 {
-                if (u - 0.5).abs() < 0.25 {
-                    Rgb([230, 190, 160])
-                } else {
-                    continue;
-                }
-            } else if v < 0.55 {
-                if ((v * 20.0) as i64) % 2 == 0 {
-                    Rgb([30, 60, 200])
-                } else {
-                    Rgb([240, 240, 60])
-                }
-            } else if (u - 0.5).abs() < 0.08 {
-                continue;
-            } else {
-                Rgb([40, 30, 30])
-            };
-            im.put_pixel(x as u32, y as u32, c);
-        }
-    }
-}
-
-/// Frame k: the background with pixel noise and the sprite at its box.
-fn frame(bg: &RgbImage, b: &BoundingBox, rng: &mut ChaCha8Rng) -> RgbImage {
-    let mut im = bg.clone();
-    draw_sprite(&mut im, b);
-    for p in im.pixels_mut() {
-        for c in &mut p.0 {
-            *c = (f64::from(*c) + rng.random_range(-8.0..8.0)).clamp(0.0, 255.0) as u8;
-        }
-    }
-    im
-}
-
 /// Runs a detector alone (confirmed where it finds itself) for `n` frames along `path`;
 /// returns the boxes it reported.
 fn follow(path: &[BoundingBox], seed: u64) -> Vec<Option<BoundingBox>> {
@@ -264,18 +204,9 @@ fn follow(path: &[BoundingBox], seed: u64) -> Vec<Option<BoundingBox>> {
     out
 }
 
-fn wandering_path(n: usize) -> Vec<BoundingBox> {
-    (0..n)
-        .map(|k| {
-            let t = k as f64;
-            BoundingBox::new(60.0 + 1.0 * t, 90.0 + 25.0 * (t / 30.0).sin(), 24.0, 60.0).unwrap()
-        })
-        .collect()
-}
-
 #[test]
 fn follows_a_textured_sprite_on_clutter_for_200_frames() {
-    let path = wandering_path(200);
+    let path = wandering_path(200).unwrap();
     let found = follow(&path, 11);
     let good = found
         .iter()
@@ -290,7 +221,7 @@ fn follows_a_textured_sprite_on_clutter_for_200_frames() {
 
 #[test]
 fn identical_with_one_and_two_threads() {
-    let path = wandering_path(40);
+    let path = wandering_path(40).unwrap();
     let run = |threads: usize| {
         rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
