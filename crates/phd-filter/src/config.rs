@@ -112,6 +112,17 @@ impl Motion {
     }
 }
 
+/// A filter step goes forward in time: `frames` (after the last step) must be at least 1.
+pub(crate) fn check_frames_after(frames: u64) -> crate::error::Result<()> {
+    if frames == 0 {
+        return Err(crate::error::Error::InvalidParameter {
+            name: "frames",
+            reason: "0 frames after the last one; a step moves time forward".into(),
+        });
+    }
+    Ok(())
+}
+
 /// Σ j and Σ j² over j = 0..k−1: k(k−1)/2 and (k−1)k(2k−1)/6, in f64 (exact for k < 2²⁰;
 /// beyond, within rounding, and finite for every u64).
 pub(crate) fn power_sums(frames: u64) -> (f64, f64) {

@@ -191,12 +191,7 @@ impl GmPhd {
     /// (weights scale alike, so pruning after the gap removes what pruning on the way would
     /// have). The cost does not depend on `frames`; `frames = 0` is an error.
     pub fn step_after(&mut self, frames: u64, boxes: &[BoundingBox]) -> Result<PhdStep> {
-        if frames == 0 {
-            return Err(Error::InvalidParameter {
-                name: "frames",
-                reason: "0 frames after the last one; a step moves time forward".into(),
-            });
-        }
+        crate::config::check_frames_after(frames)?;
         let zs: Vec<(usize, Vec4)> = boxes
             .iter()
             .enumerate()

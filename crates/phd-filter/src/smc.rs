@@ -25,7 +25,7 @@ use crate::config::{
     BoxMeasurement, BoxState, Likelihood, Motion, PhdConfig, measurement_from_box, power_sums,
     state_box,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// Particles per parallel work item (and per generator stream).
 const CHUNK: usize = 2048;
@@ -255,12 +255,7 @@ impl SmcPhd {
     ///
     /// `frames = 1` is [`step`](Self::step); `frames = 0` is an error.
     pub fn step_after(&mut self, frames: u64, boxes: &[BoundingBox]) -> Result<PhdStep> {
-        if frames == 0 {
-            return Err(Error::InvalidParameter {
-                name: "frames",
-                reason: "0 frames after the last one; a step moves time forward".into(),
-            });
-        }
+        crate::config::check_frames_after(frames)?;
         let valid: Vec<(usize, BoxMeasurement)> = boxes
             .iter()
             .enumerate()
