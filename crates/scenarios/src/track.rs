@@ -1497,13 +1497,7 @@ fn track_points(
     };
     let mut tracks = Vec::with_capacity(associations.len());
     for (i, meas) in associations.iter().enumerate() {
-        let dets: Vec<(Frame, BoundingBox)> = meas
-            .iter()
-            .map(|&m| {
-                let d = &detections[m as usize];
-                (d.frame, d.bbox)
-            })
-            .collect();
+        let dets = detection_boxes(&detections, meas);
         let points = smooth_boxes(&dets, &settings.boxes, None)?;
         if !points.is_empty() {
             tracks.push(Track::from_points(TrackId(i as u64 + 1), points)?);
@@ -1654,13 +1648,7 @@ fn gnn_online_output(
 ) -> Result<TrackSet> {
     let mut out = Vec::with_capacity(tracks.len());
     for (i, meas) in tracks.iter().enumerate() {
-        let dets: Vec<(Frame, BoundingBox)> = meas
-            .iter()
-            .map(|&m| {
-                let d = &detections[m as usize];
-                (d.frame, d.bbox)
-            })
-            .collect();
+        let dets = detection_boxes(detections, meas);
         // The causal fit at each detection's frame, from the detections within the kernel's
         // reach before it (all the fit reads: the track's detection at f is the slice's last),
         // so a track costs O(length · reach), not O(length²).
@@ -1766,6 +1754,17 @@ fn track_online(
         .map(|(label, points)| Track::from_points(TrackId(label + 1), points))
         .collect::<std::result::Result<Vec<_>, _>>()?;
     Ok(TrackSet::from_tracks(tracks)?)
+}
+
+/// A track's (frame, box) pairs from its measurement ids (indices into `detections`, which
+/// `problem_of` orders by id).
+fn detection_boxes(detections: &[MotRow], meas: &[MeasId]) -> Vec<(Frame, BoundingBox)> {
+    meas.iter()
+        .map(|&m| {
+            let d = &detections[m as usize];
+            (d.frame, d.bbox)
+        })
+        .collect()
 }
 
 /// Frames on either side whose detections the box kernel of width σ reads: 3σ, rounded up
