@@ -206,23 +206,11 @@ impl Partition<'_> {
             if i > 0 || !mandatory_first {
                 lp += self.model.log_go_on;
             }
-            let (t, t_next) = (self.problem.scan_of(y), self.problem.scan_of(next));
-            let (earlier, later) = match end {
-                End::Tail => (t, t_next),
-                End::Head => (t_next, t),
-            };
-            if later <= earlier
-                || later - earlier > self.problem.max_gap()
-                || !self.is_free(next)
-                || (end == End::Head && earlier < self.lo)
-            {
+            let step = self.log_grow_step(y, next, end);
+            if step == f64::NEG_INFINITY {
                 return f64::NEG_INFINITY;
             }
-            let d = later - earlier;
-            if !self.problem.within(y, next, d) {
-                return f64::NEG_INFINITY;
-            }
-            lp += self.model.log_zeta[d - 1] - ln_count(self.free_neighbour_count(y, d, end));
+            lp += step;
             y = next;
         }
         lp + self.log_stop_at(y, end)
