@@ -1,0 +1,870 @@
+//! Trackers for detection files: what `cargo xtask track` and the `mot-track` and
+//! `mot-realistic` pipelines run. MCMCDA (offline batch, or online with a sliding window) and
+//! GNN associate the box centres as point measurements; the SMC-PHD filter tracks the boxes
+//! themselves. Without a configuration each tracker uses its model scaled to the boxes
+//! ([`McmcdaConfig::for_boxes`], [`PhdConfig::for_boxes`]) and then fitted to the file
+//! ([`fit_model`]: p_d, clutter and birth rates, R and q from the confident tracks of a first
+//! GNN pass, iterated).
+//!
+//! Output boxes follow the detections a track holds ([`smooth_boxes`]): each box edge is a
+//! local-linear kernel fit over the track's detections (σ = `[boxes] smoothing_frames`), so a
+//! box shrinks with the detections where a person is cut by the image border, missed frames are
+//! bridged, and nothing is extrapolated beyond a track's first and last detection unless
+//! `[boxes] extrapolate_frames` asks for it. Online MCMCDA outputs, at each frame, the tracks
+//! its window's MAP reports then, with a box fitted to their detections up to that frame only.
+//!
+//! No tracker's cost grows with gaps in the frame numbers: MCMCDA's and GNN's `Problem` stores
+//! only non-empty scans, and the PHD path steps only the frames with detections, jumping each
+//! gap in one prediction with the motion model's exact multi-frame transition
+//! (`phd_filter::SmcPhd::step_after`); a frame number with no row is a frame in which the
+//! detector found nothing.
+
+use std::fmt;
+use std::str::FromStr;
+
+use anyhow::{Context, Result, bail};
+use mcmcda::{
+    McmcdaConfig, MeasId, NearestNeighbourConfig, OnlineConfig, OnlineTracker, Partition, Problem,
+    TrackInit, nearest_neighbour_tracks, run_chains,
+};
+use phd_filter::{PhdConfig, SmcPhd};
+use serde::{Deserialize, Serialize};
+use tracker_model::{
+    BoundingBox, ConstantVelocity2, Frame, MotRow, Track, TrackId, TrackPoint, TrackSet, Vec2,
+};
+
+mod association;
+mod boxes;
+mod fit;
+mod phd;
+
+use association::track_points;
+use boxes::{detection_boxes, kernel_reach};
+use fit::{GAP_BOX_WIDTHS, centres, problem_of, score_ratios};
+use phd::{MAX_COAST_FRAMES, track_boxes_phd};
+
+pub use boxes::smooth_boxes;
+pub use fit::{fit_model, fit_scores};
+pub use phd::PhdLabelConfig;
+
+/// Which tracker runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Tracker {
+    /// Offline (batch) MCMCDA over the whole file.
+    Mcmcda,
+    /// Online sliding-window MCMCDA, output frame by frame.
+    #[serde(rename = "mcmcda-online")]
+    McmcdaOnline,
+    /// Global nearest neighbour with M-of-N confirmation.
+    Gnn,
+    /// GNN output frame by frame: each box fitted to the track's detections up to that
+    /// frame, coasted on the prediction through misses (up to `[boxes] online_coast_frames`).
+    #[serde(rename = "gnn-online")]
+    GnnOnline,
+    /// SMC-PHD on boxes (global detections only: no images, so no local detectors).
+    Phd,
+}
+
+impl Tracker {
+    /// Every tracker, in the order the command line lists them.
+    pub const ALL: [Tracker; 5] = [
+        Tracker::Mcmcda,
+        Tracker::McmcdaOnline,
+        Tracker::Gnn,
+        Tracker::GnnOnline,
+        Tracker::Phd,
+    ];
+
+    /// The name on the command line and in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Tracker::Mcmcda => "mcmcda",
+            Tracker::McmcdaOnline => "mcmcda-online",
+            Tracker::Gnn => "gnn",
+            Tracker::GnnOnline => "gnn-online",
+            Tracker::Phd => "phd",
+        }
+    }
+}
+
+impl fmt::Display for Tracker {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl FromStr for Tracker {
+    type Err = anyhow::Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Tracker::ALL
+            .into_iter()
+            .find(|t| t.name() == s)
+            .with_context(|| {
+                format!("unknown tracker {s:?}; known: mcmcda, mcmcda-online, gnn, gnn-online, phd")
+            })
+    }
+}
+
+/// Offline MCMCDA's chain.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OfflineConfig {
+    /// MCMC samples per detection in the file (the chain's length grows with the problem).
+    pub samples_per_detection: u64,
+    /// The fewest samples, whatever the file's size.
+    pub min_samples: u64,
+    /// Tracklet linking after the chain (min-cost, by the motion model; docs/mot-realistic.md):
+    /// a track may continue one that ended at most this many times d̄ frames before (0: no
+    /// linking).
+    pub link_gap_factor: f64,
+}
+
+impl Default for OfflineConfig {
+    fn default() -> Self {
+        Self {
+            samples_per_detection: 20,
+            min_samples: 20_000,
+            // Chosen on the tuning sequences of `mot-realistic` (0.5: little linked; 1, 1.5
+            // and 2 alike, 1.5 best; 3 links passers-by).
+            link_gap_factor: 1.5,
+        }
+    }
+}
+
+/// How the model is fitted to the file ([`fit_model`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct FitConfig {
+    /// Rounds of fitting (0: keep the box-scaled model).
+    pub iterations: usize,
+    /// Detections a GNN track needs to count as confident.
+    pub min_track_detections: usize,
+}
+
+impl Default for FitConfig {
+    fn default() -> Self {
+        Self {
+            iterations: 2,
+            min_track_detections: 6,
+        }
+    }
+}
+
+/// How output boxes are made from a track's detections ([`smooth_boxes`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BoxConfig {
+    /// σ, in frames, of the Gaussian kernel of the local-linear fit of each box edge.
+    pub smoothing_frames: f64,
+    /// Frames output before a track's first and after its last detection.
+    pub extrapolate_frames: u32,
+    /// Online GNN (`gnn-online`): frames a track is output from its prediction after a miss
+    /// (at most GNN's deletion gap; the track stays open to detections until that gap).
+    pub online_coast_frames: u32,
+}
+
+impl Default for BoxConfig {
+    fn default() -> Self {
+        Self {
+            smoothing_frames: 1.5,
+            extrapolate_frames: 0,
+            // On the tuning sequences of `mot-realistic` (mean MOTA): 1 → 0.829, 3 → 0.851,
+            // 5 → 0.842, the whole deletion gap (7-12 frames) → 0.818.
+            online_coast_frames: 3,
+        }
+    }
+}
+
+/// Whether and how the detection scores (the confidence column) enter MCMCDA's and GNN's
+/// likelihoods ([`fit_scores`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ScoreConfig {
+    /// Use the confidence column when it varies over the file.
+    pub enabled: bool,
+    /// The largest |ln f₁(s)/f₀(s)| a score contributes.
+    pub max_log_ratio: f64,
+}
+
+impl Default for ScoreConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            max_log_ratio: 3.0,
+        }
+    }
+}
+
+impl ScoreConfig {
+    /// Checks the bound (finite, ≥ 0).
+    pub fn check(&self) -> Result<()> {
+        if !(self.max_log_ratio.is_finite() && self.max_log_ratio >= 0.0) {
+            bail!(
+                "max_log_ratio = {}; it must be finite and ≥ 0",
+                self.max_log_ratio
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The score densities fitted to a file ([`fit_scores`]): f₁ of the scores of detections in
+/// confident tracks, f₀ of those in no track, as ln f₁/f₀ tabulated over the file's score
+/// range.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScoreModel {
+    lo: f64,
+    hi: f64,
+    /// ln f₁/f₀ at `SCORE_GRID` evenly spaced scores from `lo` to `hi`, clamped.
+    log_ratio: Vec<f64>,
+    /// (count, mean, standard deviation) of the track and the clutter scores.
+    track: (usize, f64, f64),
+    clutter: (usize, f64, f64),
+}
+
+/// The online MCMCDA tracker's settings for detection files: the crate's defaults, except
+/// that a track is output from the prediction for up to 5 frames after its last detection
+/// (2, the crate's default, drops people through short occlusions; 5 and 8 did alike, 12
+/// worse, on the tuning sequences of `mot-realistic`).
+fn online_base() -> OnlineConfig {
+    OnlineConfig {
+        coast_scans: 5,
+        ..OnlineConfig::default()
+    }
+}
+
+/// Points of the tabulated score ratio.
+const SCORE_GRID: usize = 64;
+
+impl ScoreModel {
+    /// ln f₁(s)/f₀(s), linear between the grid points (constant beyond the file's range).
+    pub fn log_ratio(&self, s: f64) -> f64 {
+        let n = self.log_ratio.len();
+        if n < 2 || !s.is_finite() {
+            return 0.0;
+        }
+        let u = ((s - self.lo) / (self.hi - self.lo)).clamp(0.0, 1.0) * (n - 1) as f64;
+        let i = (u.floor() as usize).min(n - 2);
+        let t = u - i as f64;
+        self.log_ratio[i] + t * (self.log_ratio[i + 1] - self.log_ratio[i])
+    }
+
+    /// One line: the two samples and where the ratio crosses 1.
+    pub fn summary(&self) -> String {
+        let crossing = (1..self.log_ratio.len())
+            .find(|&i| self.log_ratio[i - 1] < 0.0 && self.log_ratio[i] >= 0.0)
+            .map(|i| {
+                let (a, b) = (self.log_ratio[i - 1], self.log_ratio[i]);
+                let step = (self.hi - self.lo) / (self.log_ratio.len() - 1) as f64;
+                format!("{:.3}", self.lo + step * (i as f64 - 1.0 + a / (a - b)))
+            })
+            .unwrap_or_else(|| "none".into());
+        format!(
+            "scores: tracks {:.3} ± {:.3} (n {}), clutter {:.3} ± {:.3} (n {}), f₁/f₀ = 1 at {}, \
+             ln f₁/f₀ {:.2} to {:.2}",
+            self.track.1,
+            self.track.2,
+            self.track.0,
+            self.clutter.1,
+            self.clutter.2,
+            self.clutter.0,
+            crossing,
+            self.log_ratio.iter().copied().fold(f64::INFINITY, f64::min),
+            self.log_ratio
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max),
+        )
+    }
+}
+
+/// The optional configuration (TOML): any of the tables, each field optional. Fields of
+/// `[model]` and `[phd]` override the configurations scaled and fitted to the detections.
+/// Every table present is checked, whichever tracker runs ([`TrackConfig::resolve`]).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrackConfig {
+    model: Option<toml::Table>,
+    #[serde(default)]
+    fit: FitConfig,
+    #[serde(default)]
+    offline: OfflineConfig,
+    /// Fields of `mcmcda::OnlineConfig`, overriding [`online_base`].
+    online: Option<toml::Table>,
+    #[serde(default)]
+    gnn: NearestNeighbourConfig,
+    #[serde(default)]
+    boxes: BoxConfig,
+    #[serde(default)]
+    scores: ScoreConfig,
+    /// Fields of `phd_filter::PhdConfig`, overriding a configuration scaled to the boxes.
+    phd: Option<toml::Table>,
+    #[serde(default)]
+    phd_labels: PhdLabelConfig,
+}
+
+/// The effective configuration of every tracker: what runs, with every field set.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct EffectiveConfig {
+    /// MCMCDA's and GNN's model (`[model]`).
+    pub model: McmcdaConfig,
+    /// How the model was fitted (`[fit]`).
+    pub fit: FitConfig,
+    /// Offline MCMCDA (`[offline]`).
+    pub offline: OfflineConfig,
+    /// Output boxes (`[boxes]`).
+    pub boxes: BoxConfig,
+    /// Detection scores (`[scores]`).
+    pub scores: ScoreConfig,
+    /// The score densities fitted to the file (none when `[scores]` is off or the file's
+    /// scores do not vary or are too few); not a key of the configuration.
+    #[serde(skip)]
+    pub score_model: Option<ScoreModel>,
+    /// The online MCMCDA tracker (`[online]`).
+    pub online: OnlineConfig,
+    /// GNN (`[gnn]`).
+    pub gnn: NearestNeighbourConfig,
+    /// The SMC-PHD filter (`[phd]`).
+    pub phd: PhdConfig,
+    /// The PHD tracker's track management (`[phd_labels]`).
+    pub phd_labels: PhdLabelConfig,
+}
+
+impl TrackConfig {
+    /// Builds and checks every table against the detections `rows` (the models are scaled to
+    /// their boxes; with no rows, the defaults of the papers are the base). A table for a
+    /// tracker that does not run is checked too: a mistake in it is a mistake in the file.
+    pub fn resolve(&self, rows: &[MotRow]) -> Result<EffectiveConfig> {
+        let boxes = boxes(rows);
+        let (model_base, mut phd_base) = if boxes.is_empty() {
+            (McmcdaConfig::default(), PhdConfig::default())
+        } else {
+            (
+                McmcdaConfig::for_boxes(&boxes)?,
+                PhdConfig::for_boxes(&boxes)?,
+            )
+        };
+        if self.fit.min_track_detections < 3 {
+            bail!(
+                "in the [fit] table of the configuration: min_track_detections = {}; the \
+                 moment estimates need at least 3",
+                self.fit.min_track_detections
+            );
+        }
+        self.offline
+            .check()
+            .context("in the [offline] table of the configuration")?;
+        self.boxes
+            .check()
+            .context("in the [boxes] table of the configuration")?;
+        self.scores
+            .check()
+            .context("in the [scores] table of the configuration")?;
+        let model_base = if boxes.is_empty() {
+            model_base
+        } else {
+            fit_model(&model_base, rows, &self.fit)?
+        };
+        if self.fit.iterations > 0 && !boxes.is_empty() {
+            // The PHD filter's rates, noise and motion come from the same fit: constant
+            // velocity with MCMCDA's q, newborn velocity σ from the fitted velocity variance,
+            // the centre's R and twice its σ for the size.
+            phd_base.p_detect = model_base.p_detect;
+            phd_base.clutter_rate = model_base.clutter_per_scan;
+            phd_base.birth_rate = model_base.births_per_scan;
+            // Floors at half the box-scaled σ: a particle filter needs likelihoods wider than
+            // the spacing of its particles (near-noiseless files would starve it).
+            let r = model_base.measurement_noise;
+            let floor = phd_base.measurement_std;
+            let (sx, sy) = (r[(0, 0)].sqrt(), r[(1, 1)].sqrt());
+            phd_base.measurement_std = [
+                sx.max(0.5 * floor[0]),
+                sy.max(0.5 * floor[1]),
+                (2.0 * sx).max(0.5 * floor[2]),
+                (2.0 * sy).max(0.5 * floor[3]),
+            ];
+            let size_std = match phd_base.motion {
+                phd_filter::Motion::RandomWalk { size_std, .. }
+                | phd_filter::Motion::ConstantVelocity { size_std, .. } => size_std,
+            };
+            let q = match model_base.motion.noise() {
+                tracker_model::CvNoise::Discrete {
+                    acceleration_covariance,
+                } => acceleration_covariance[(0, 0)],
+                tracker_model::CvNoise::WhiteAcceleration { q } => q,
+            };
+            phd_base.motion = phd_filter::Motion::ConstantVelocity {
+                acceleration_std: q.sqrt().max(0.1 * floor[0]),
+                size_std,
+            };
+            if let TrackInit::FirstMeasurement {
+                velocity_variance: Some(v),
+            } = model_base.track_init
+            {
+                phd_base.birth_velocity_std = v.sqrt();
+            }
+        }
+        let model = overridden(&model_base, self.model.as_ref(), "model")?;
+        model
+            .check()
+            .context("in the [model] table of the configuration")?;
+        let online = overridden(&online_base(), self.online.as_ref(), "online")?;
+        online
+            .check()
+            .context("in the [online] table of the configuration")?;
+        if online.samples_per_scan == 0 {
+            bail!(
+                "in the [online] table of the configuration: samples_per_scan = 0; MCMCDA \
+                 needs at least 1 sample per scan to find any track"
+            );
+        }
+        self.gnn
+            .check()
+            .context("in the [gnn] table of the configuration")?;
+        let phd = overridden(&phd_base, self.phd.as_ref(), "phd")?;
+        phd.check()
+            .context("in the [phd] table of the configuration")?;
+        self.phd_labels
+            .check()
+            .context("in the [phd_labels] table of the configuration")?;
+        let mut gnn = self.gnn;
+        if gnn.max_gap.is_none() && self.fit.iterations > 0 && !boxes.is_empty() {
+            // GNN deletes after one box width of travel, half of MCMCDA's d̄ (the fitted one,
+            // or the user's `[model] max_gap`).
+            gnn.max_gap = Some(((f64::from(model.max_gap) / GAP_BOX_WIDTHS).round() as u32).max(1));
+        }
+        let score_model = fit_scores(&model, rows, &self.fit, &gnn, &self.scores)?;
+        Ok(EffectiveConfig {
+            model,
+            fit: self.fit,
+            offline: self.offline,
+            boxes: self.boxes,
+            scores: self.scores,
+            score_model,
+            online,
+            gnn,
+            phd,
+            phd_labels: self.phd_labels,
+        })
+    }
+}
+
+/// Tracks `rows` and returns boxed tracks with ids from 1. The configuration is resolved and
+/// checked first, every table of it.
+pub fn track_detections(
+    tracker: Tracker,
+    rows: &[MotRow],
+    settings: &TrackConfig,
+    seed: u64,
+) -> Result<TrackSet> {
+    if rows.is_empty() {
+        bail!("no detections");
+    }
+    let config = settings.resolve(rows)?;
+    match tracker {
+        Tracker::Phd => track_boxes_phd(rows, &config, seed),
+        Tracker::Mcmcda | Tracker::McmcdaOnline | Tracker::Gnn | Tracker::GnnOnline => {
+            track_points(tracker, rows, &config, seed)
+        }
+    }
+}
+
+/// [`track_detections`], or, given a folder of `frames`, the PHD tracker fused with image local
+/// detectors on those pictures ([`crate::track_frames`]; `--tracker phd` only).
+pub fn track_detections_with_frames(
+    tracker: Tracker,
+    rows: &[MotRow],
+    settings: &TrackConfig,
+    seed: u64,
+    frames: Option<&std::path::Path>,
+) -> Result<TrackSet> {
+    match (frames, tracker) {
+        (None, _) => track_detections(tracker, rows, settings, seed),
+        (Some(dir), Tracker::Phd) => crate::track_frames::track_frames(
+            dir,
+            rows,
+            settings,
+            &crate::track_frames::FusedSettings::default(),
+            seed,
+        ),
+        (Some(_), _) => bail!("--frames runs the fused PHD tracker: use it with --tracker phd"),
+    }
+}
+
+/// Why a tracker that was given detections returned no track, or nothing when it returned
+/// some: a warning for the user that names the parameters that decide it.
+pub fn empty_output_warning(
+    tracker: Tracker,
+    rows: &[MotRow],
+    config: &EffectiveConfig,
+    tracks: &TrackSet,
+) -> Option<String> {
+    if !tracks.is_empty() || rows.is_empty() {
+        return None;
+    }
+    let frames: std::collections::BTreeSet<Frame> = rows.iter().map(|r| r.frame).collect();
+    let seen = format!(
+        "{tracker} found no track in {} detections over {} frames",
+        rows.len(),
+        frames.len()
+    );
+    let m = &config.model;
+    let why = match tracker {
+        Tracker::Mcmcda | Tracker::McmcdaOnline | Tracker::Gnn | Tracker::GnnOnline => format!(
+            "a track needs detections in at least two frames at most max_gap = {} frames \
+             apart, moving at most max_speed = {} per frame, and it must explain them better \
+             than clutter_per_scan = {} false alarms per frame over volume = {}",
+            m.max_gap, m.max_speed, m.clutter_per_scan, m.volume
+        ),
+        Tracker::Phd => format!(
+            "a track is reported where the filter's weight passes extraction_threshold = {} \
+             with p_detect = {}, birth_rate = {} and clutter_rate = {} per frame",
+            config.phd.extraction_threshold,
+            config.phd.p_detect,
+            config.phd.birth_rate,
+            config.phd.clutter_rate
+        ),
+    };
+    Some(format!(
+        "{seen}: {why}. See the effective configuration with `cargo xtask track \
+         --print-config --tracker {tracker} --input FILE`"
+    ))
+}
+
+/// One line of explanation per key of each table, in the order `--print-config` writes them.
+const KEY_COMMENTS: [(&str, &[(&str, &str)]); 9] = [
+    (
+        "model",
+        &[
+            (
+                "volume",
+                "volume V of the surveillance region (area, pixels²)",
+            ),
+            ("births_per_scan", "expected new targets per frame, λ_b·V"),
+            (
+                "clutter_per_scan",
+                "expected false detections per frame, λ_f·V",
+            ),
+            (
+                "p_disappear",
+                "probability p_z that a target disappears between frames",
+            ),
+            ("p_detect", "detection probability p_d"),
+            (
+                "motion",
+                "constant-velocity motion: frame period dt_s and the acceleration noise",
+            ),
+            (
+                "measurement_noise",
+                "covariance R of a detection's centre, as rows [[xx, xy], [yx, yy]]",
+            ),
+            (
+                "max_gap",
+                "d̄: the most frames between two detections of one track (1-64)",
+            ),
+            (
+                "max_speed",
+                "v̄: the largest speed, pixels per frame (gates associations)",
+            ),
+            (
+                "stop_probability",
+                "γ: the chance that growing a track stops before each further detection",
+            ),
+            (
+                "gap_distribution",
+                "ζ, the gap distribution: \"geometric\" or \"uniform\"",
+            ),
+            (
+                "head_probability",
+                "probability that extension/reduction/update acts on a track's head",
+            ),
+            (
+                "move_weights",
+                "ξ: weights of birth, death, split, merge, extension, reduction, update, switch",
+            ),
+            (
+                "track_init",
+                "how a track's filter starts (first_measurement {velocity_variance} or two_point)",
+            ),
+            (
+                "track_end",
+                "how a track's end is scored: \"disappeared\" or \"undetected\"",
+            ),
+        ],
+    ),
+    (
+        "fit",
+        &[
+            (
+                "iterations",
+                "rounds of fitting p_d, clutter, births, R and q to the file (0 = off)",
+            ),
+            (
+                "min_track_detections",
+                "detections a GNN track needs to enter the fit",
+            ),
+        ],
+    ),
+    (
+        "offline",
+        &[
+            (
+                "samples_per_detection",
+                "MCMC samples per detection of the file",
+            ),
+            ("min_samples", "the fewest MCMC samples"),
+            (
+                "link_gap_factor",
+                "tracklet linking: a track may continue one that ended up to this many d̄ frames before (0 = off)",
+            ),
+        ],
+    ),
+    (
+        "online",
+        &[
+            ("window", "t_win: frames in the sliding window (≥ 2)"),
+            ("samples_per_scan", "MCMC samples per window (≥ 1)"),
+            (
+                "extension_gate",
+                "χ² gate of the greedy extension of live tracks into a new frame",
+            ),
+            (
+                "coast_scans",
+                "a track is reported while its last detection is at most this many frames old",
+            ),
+        ],
+    ),
+    (
+        "gnn",
+        &[
+            (
+                "assignment",
+                "\"optimal\" (minimum total cost) or \"greedy\"",
+            ),
+            (
+                "cost",
+                "\"log_likelihood_ratio\" (a track may go unassigned) or \"forced\"",
+            ),
+            (
+                "gate",
+                "χ² gate on the innovation's squared Mahalanobis distance",
+            ),
+            ("confirm_hits", "M of M-of-N confirmation"),
+            ("confirm_window", "N of M-of-N confirmation"),
+            (
+                "max_gap",
+                "the largest gap in frames within a track; unset = the model's max_gap",
+            ),
+        ],
+    ),
+    (
+        "boxes",
+        &[
+            (
+                "smoothing_frames",
+                "σ (frames) of the kernel fitting each output box edge to the track's detections",
+            ),
+            (
+                "extrapolate_frames",
+                "frames output before the first and after the last detection of a track",
+            ),
+            (
+                "online_coast_frames",
+                "gnn-online: frames a track is output from its prediction after a miss (≤ the deletion gap)",
+            ),
+        ],
+    ),
+    (
+        "scores",
+        &[
+            (
+                "enabled",
+                "use the confidence column: ln f₁(s)/f₀(s), fitted to the file, in each detection's likelihood",
+            ),
+            (
+                "max_log_ratio",
+                "the largest |ln f₁(s)/f₀(s)| one detection's score contributes",
+            ),
+        ],
+    ),
+    (
+        "phd",
+        &[
+            ("p_survive", "survival probability p_S"),
+            ("p_detect", "detection probability p_D"),
+            ("clutter_rate", "expected false detections per frame, λ_c"),
+            (
+                "measurement_volume",
+                "volume of measurement space (centre x range · y range · width range · height range)",
+            ),
+            ("birth_rate", "expected births per frame"),
+            (
+                "measurement_std",
+                "σ of the measured [c_x, c_y, w, h], pixels",
+            ),
+            (
+                "motion",
+                "random_walk {position_std, size_std} or constant_velocity {acceleration_std, size_std}",
+            ),
+            (
+                "birth_velocity_std",
+                "σ of a newborn's velocity (constant_velocity only)",
+            ),
+            ("particles_per_target", "SMC particles per expected target"),
+            (
+                "birth_particles",
+                "SMC particles for each detection's newborn group",
+            ),
+            ("max_particles", "the most SMC particles after resampling"),
+            (
+                "extraction_threshold",
+                "a box is reported where the filter's weight exceeds this",
+            ),
+            (
+                "label_min_share",
+                "an estimate keeps the oldest identity holding at least this share of its weight",
+            ),
+        ],
+    ),
+    (
+        "phd_labels",
+        &[
+            (
+                "confirm_hits",
+                "estimates a tentative PHD track needs to get an id",
+            ),
+            ("confirm_window", "frames within which it needs them"),
+            (
+                "min_iou",
+                "overlap an estimate needs with a track's last box to continue it",
+            ),
+            (
+                "min_mass",
+                "share of a missed target's expected PHD mass its label must hold to keep its id",
+            ),
+            (
+                "max_misses",
+                "the most frames a confirmed track is output from the prediction",
+            ),
+        ],
+    ),
+];
+
+/// The tables a tracker reads.
+fn tables_of(tracker: Tracker) -> &'static [&'static str] {
+    match tracker {
+        Tracker::Mcmcda => &["model", "fit", "offline", "boxes", "scores"],
+        Tracker::McmcdaOnline => &["model", "fit", "online", "boxes", "scores"],
+        Tracker::Gnn | Tracker::GnnOnline => &["model", "fit", "gnn", "boxes", "scores"],
+        Tracker::Phd => &["fit", "phd", "phd_labels"],
+    }
+}
+
+/// The effective configuration as commented TOML: every key of the tables `tracker` reads
+/// (all of them without one) with its value and a one-line comment. Loading the text back as a
+/// [`TrackConfig`] gives the same effective configuration. Unset optional keys are written
+/// as comments.
+pub fn render_config(config: &EffectiveConfig, tracker: Option<Tracker>) -> Result<String> {
+    let all = toml::Table::try_from(config)?;
+    let mut out = String::from(
+        "# Effective configuration of `cargo xtask track` (load it with --config FILE).\n\
+         # Every key is optional: a missing key of [model] or [phd] keeps the value scaled and\n\
+         # fitted to the detections, of the other tables its default.\n",
+    );
+    for (name, keys) in KEY_COMMENTS {
+        if tracker.is_some_and(|t| !tables_of(t).contains(&name)) {
+            continue;
+        }
+        let table = all
+            .get(name)
+            .and_then(toml::Value::as_table)
+            .with_context(|| format!("the configuration has no [{name}] table"))?;
+        if let Some(key) = table.keys().find(|k| !keys.iter().any(|(c, _)| c == k)) {
+            bail!("[{name}] {key} has no comment in KEY_COMMENTS");
+        }
+        out.push_str(&format!("\n[{name}]\n"));
+        for (key, comment) in keys {
+            out.push_str(&format!("# {comment}\n"));
+            match table.get(*key) {
+                Some(value) => out.push_str(&format!("{key} = {value}\n")),
+                None => out.push_str(&format!("# {key} is unset\n")),
+            }
+        }
+    }
+    Ok(out)
+}
+impl OfflineConfig {
+    /// Checks that the chain runs at all.
+    pub fn check(&self) -> Result<()> {
+        if self.min_samples == 0 && self.samples_per_detection == 0 {
+            bail!("min_samples = samples_per_detection = 0: the chain would never move");
+        }
+        // At most 100 × d̄ (d̄ ≤ 64 frames): a link's bridged frames are output boxes, so the
+        // factor bounds what one gap in the frame numbers can cost.
+        if !(self.link_gap_factor.is_finite() && (0.0..=100.0).contains(&self.link_gap_factor)) {
+            bail!(
+                "link_gap_factor = {}; it must be in [0, 100]",
+                self.link_gap_factor
+            );
+        }
+        Ok(())
+    }
+
+    fn samples(&self, n_detections: usize) -> u64 {
+        (self
+            .samples_per_detection
+            .saturating_mul(n_detections as u64))
+        .max(self.min_samples)
+    }
+}
+
+impl BoxConfig {
+    /// Checks the kernel width (finite, > 0) and bounds the frames output without a detection
+    /// (as `[phd_labels] max_misses`: each is a box per track, so an unbounded value would let
+    /// a configuration ask for billions of boxes).
+    pub fn check(&self) -> Result<()> {
+        if !(self.smoothing_frames.is_finite() && self.smoothing_frames > 0.0) {
+            bail!(
+                "smoothing_frames = {}; it must be finite and > 0",
+                self.smoothing_frames
+            );
+        }
+        for (name, frames) in [
+            ("extrapolate_frames", self.extrapolate_frames),
+            ("online_coast_frames", self.online_coast_frames),
+        ] {
+            if frames > MAX_COAST_FRAMES {
+                bail!(
+                    "{name} = {frames} is over {MAX_COAST_FRAMES}: each frame is one output box \
+                     per track"
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
+fn boxes(rows: &[MotRow]) -> Vec<BoundingBox> {
+    rows.iter().map(|r| r.bbox).collect()
+}
+
+/// Merges the fields of `overrides` into `base` (both serde structs) and checks the result.
+fn overridden<T: Clone + serde::Serialize + serde::de::DeserializeOwned>(
+    base: &T,
+    overrides: Option<&toml::Table>,
+    what: &str,
+) -> Result<T> {
+    let Some(overrides) = overrides else {
+        return Ok(base.clone());
+    };
+    let mut table = toml::Table::try_from(base)?;
+    table.extend(overrides.clone());
+    table
+        .try_into()
+        .with_context(|| format!("in the [{what}] table of the configuration"))
+}
+
+#[cfg(test)]
+mod tests;
