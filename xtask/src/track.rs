@@ -70,9 +70,9 @@ pub fn run(req: &Request<'_>) -> Outcome {
     };
     let rows = read_input(input)?;
     let start = std::time::Instant::now();
-    let set = track_detections_with_frames(tracker, &rows, &settings, req.seed, req.frames)?;
+    let (set, effective) =
+        track_detections_with_frames(tracker, &rows, &settings, req.seed, req.frames)?;
     let elapsed = start.elapsed().as_secs_f64();
-    let effective = settings.resolve(&rows)?;
     if let Some(warning) = empty_output_warning(tracker, &rows, &effective, &set) {
         eprintln!("warning: {warning}");
     }

@@ -30,7 +30,7 @@ use rand_chacha::ChaCha8Rng;
 use sensors_video::PixelFormat;
 use tracker_model::{BoundingBox, Frame, MotRow, TrackSet};
 
-use crate::track::TrackConfig;
+use crate::track::{EffectiveConfig, TrackConfig};
 
 /// p_D of the fused filter: with local detectors feeding it, a followed target is observed in
 /// nearly every frame, so the filter's p_D is that of the fused observations, not the global
@@ -362,12 +362,22 @@ pub fn track_frames(
     fused: &FusedSettings,
     seed: u64,
 ) -> Result<TrackSet> {
+    track_frames_resolved(dir, rows, &settings.resolve(rows)?, fused, seed)
+}
+
+/// [`track_frames`] with the configuration already resolved against `rows`.
+pub(crate) fn track_frames_resolved(
+    dir: &Path,
+    rows: &[MotRow],
+    config: &EffectiveConfig,
+    fused: &FusedSettings,
+    seed: u64,
+) -> Result<TrackSet> {
     let folder = FrameFolder::open(dir)?;
     if rows.is_empty() {
         bail!("no detections");
     }
     folder.check_detections(rows)?;
-    let config = settings.resolve(rows)?;
     let filter = phd_filter::PhdConfig {
         p_detect: fused.p_detect,
         ..config.phd

@@ -472,25 +472,35 @@ pub fn track_detections(
 }
 
 /// [`track_detections`], or, given a folder of `frames`, the PHD tracker fused with image local
-/// detectors on those pictures ([`crate::track_frames`]; `--tracker phd` only).
+/// detectors on those pictures ([`crate::track_frames`]; `--tracker phd` only). Also returns
+/// the configuration the tracker ran with, resolved once: resolving fits the model to the file,
+/// which costs as much as a GNN pass, so the caller must not resolve it again to report it.
 pub fn track_detections_with_frames(
     tracker: Tracker,
     rows: &[MotRow],
     settings: &TrackConfig,
     seed: u64,
     frames: Option<&std::path::Path>,
-) -> Result<TrackSet> {
-    match (frames, tracker) {
-        (None, _) => track_detections(tracker, rows, settings, seed),
-        (Some(dir), Tracker::Phd) => crate::track_frames::track_frames(
+) -> Result<(TrackSet, EffectiveConfig)> {
+    if frames.is_some() && tracker != Tracker::Phd {
+        bail!("--frames runs the fused PHD tracker: use it with --tracker phd");
+    }
+    if rows.is_empty() {
+        bail!("no detections");
+    }
+    let config = settings.resolve(rows)?;
+    let tracks = match (frames, tracker) {
+        (Some(dir), _) => crate::track_frames::track_frames_resolved(
             dir,
             rows,
-            settings,
+            &config,
             &crate::track_frames::FusedSettings::default(),
             seed,
-        ),
-        (Some(_), _) => bail!("--frames runs the fused PHD tracker: use it with --tracker phd"),
-    }
+        )?,
+        (None, Tracker::Phd) => track_boxes_phd(rows, &config, seed)?,
+        (None, _) => track_points(tracker, rows, &config, seed)?,
+    };
+    Ok((tracks, config))
 }
 
 /// Why a tracker that was given detections returned no track, or nothing when it returned
