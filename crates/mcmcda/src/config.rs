@@ -266,6 +266,11 @@ pub struct Model {
     /// ζ(d) for d = 1..d̄ at index d − 1, its logarithm and cumulative sums.
     pub(crate) zeta: Vec<f64>,
     pub(crate) log_zeta: Vec<f64>,
+    /// The largest ln ζ(d).
+    pub(crate) max_log_zeta: f64,
+    /// Whether nothing couples the x and y axes (R, every Q(d) and the start covariance),
+    /// so that the Kalman step runs per axis (`track_filter::Model::step_by_axis`).
+    pub(crate) axes_decoupled: bool,
     pub(crate) zeta_cdf: Vec<f64>,
     pub(crate) log_go_on: f64,
     /// Per gap d (index d − 1): Q(d).
@@ -273,6 +278,10 @@ pub struct Model {
     /// Scan-period length radius per scan of gap: v̄·T_s.
     pub(crate) radius_per_scan: f64,
     pub(crate) initial_velocity_variance: f64,
+    /// ξ_K(m) and its logarithm, by K = 0, 1, ≥ 2 (the moves allowed depend on K only
+    /// through these three cases), in [`Move::ALL`] order: the chain reads them at every step.
+    move_table: [[f64; 8]; 3],
+    log_move_table: [[f64; 8]; 3],
 }
 
 impl McmcdaConfig {
@@ -339,7 +348,30 @@ impl McmcdaConfig {
             TrackInit::FirstMeasurement { .. } => 0.0,
         };
         let volume = self.volume;
+        let process_noise: Vec<Matrix4<f64>> = (1..=self.max_gap)
+            .map(|d| self.motion.process_noise(d))
+            .collect();
+        // x–y entries of a 4 × 4 covariance ordered [x, y, vx, vy].
+        let uncoupled4 = |m: &Matrix4<f64>| {
+            [(0, 1), (0, 3), (1, 2), (2, 3)]
+                .iter()
+                .all(|&(i, j)| m[(i, j)] == 0.0 && m[(j, i)] == 0.0)
+        };
+        let r = &self.measurement_noise;
+        let axes_decoupled = r[(0, 1)] == 0.0
+            && r[(1, 0)] == 0.0
+            && process_noise.iter().all(uncoupled4)
+            && match self.track_init {
+                TrackInit::FirstMeasurement { .. } => true,
+                TrackInit::TwoPoint { initial_covariance } => uncoupled4(&initial_covariance),
+            };
+        let move_table: [[f64; 8]; 3] = std::array::from_fn(|k| {
+            std::array::from_fn(|i| self.move_weights.probability(Move::ALL[i], k))
+        });
+        let log_move_table = move_table.map(|row| row.map(f64::ln));
         Ok(Model {
+            move_table,
+            log_move_table,
             log_birth: (self.births_per_scan / volume).ln() + velocity_term,
             log_p_z: self.p_disappear.ln(),
             log_survive: (-self.p_disappear).ln_1p(),
@@ -347,12 +379,12 @@ impl McmcdaConfig {
             log_miss: (-self.p_detect).ln_1p(),
             log_clutter_density: (self.clutter_per_scan / volume).ln(),
             log_zeta: zeta.iter().map(|z| z.ln()).collect(),
+            max_log_zeta: zeta.iter().copied().fold(0.0, f64::max).ln(),
             zeta,
             zeta_cdf,
             log_go_on: (-self.stop_probability).ln_1p(),
-            process_noise: (1..=self.max_gap)
-                .map(|d| self.motion.process_noise(d))
-                .collect(),
+            process_noise,
+            axes_decoupled,
             radius_per_scan,
             initial_velocity_variance,
             config: self.clone(),
@@ -392,11 +424,26 @@ impl Model {
     }
 
     /// ξ_K(m): the probability of proposing `m` when the partition has `k` tracks.
+    #[inline]
     pub fn move_probability(&self, m: Move, k: usize) -> f64 {
+        self.move_table[k.min(2)][m.index()]
+    }
+
+    /// ln ξ_K(m) (−∞ for a move not allowed with `k` tracks), tabulated.
+    #[inline]
+    pub(crate) fn log_move_probability(&self, m: Move, k: usize) -> f64 {
+        self.log_move_table[k.min(2)][m.index()]
+    }
+}
+
+impl MoveWeights {
+    /// ξ_K(m) with these weights: the weight of `m` over the summed weights of the moves
+    /// allowed with `k` tracks (0 for a move not allowed).
+    fn probability(&self, m: Move, k: usize) -> f64 {
         if !m.allowed_with(k) {
             return 0.0;
         }
-        let w = &self.config.move_weights.0;
+        let w = &self.0;
         let total: f64 = Move::ALL
             .iter()
             .filter(|m| m.allowed_with(k))

@@ -168,7 +168,7 @@ impl OnlineTracker {
 
     /// Processes the scan at `frame` (after any empty scans needed to reach it).
     pub fn push_scan(&mut self, frame: Frame, points: &[Vec2]) -> Result<OnlineStep> {
-        self.push_scan_scored(frame, points, &vec![0.0; points.len()])
+        self.push_and_sample(frame, points, None)
     }
 
     /// [`Self::push_scan`] with each point's score likelihood ratio ln f₁(s)/f₀(s)
@@ -179,8 +179,17 @@ impl OnlineTracker {
         points: &[Vec2],
         log_score_ratios: &[f64],
     ) -> Result<OnlineStep> {
-        self.problem
-            .push_scan_scored(frame, points, log_score_ratios)?;
+        self.push_and_sample(frame, points, Some(log_score_ratios))
+    }
+
+    /// Both of the above (all ratios 0 when `None`).
+    fn push_and_sample(
+        &mut self,
+        frame: Frame,
+        points: &[Vec2],
+        log_score_ratios: Option<&[f64]>,
+    ) -> Result<OnlineStep> {
+        self.problem.push_scored(frame, points, log_score_ratios)?;
         let hi = *self.problem.all_scans()?.end();
         let lo = self.window_start();
         // Scans leaving the window now (one, or more after a jump in frames) keep the

@@ -234,8 +234,26 @@ impl<'a> Partition<'a> {
         };
         self.model
             .filter_track(self.problem, &meas, &mut nodes, keep);
-        let ll = nodes.last().map_or(0.0, Node::cum_log_likelihood);
-        let weight = self.model.track_weight(self.problem, &meas, ll, self.hi);
+        let weight = nodes.last().map_or(0.0, |last| {
+            self.model.track_weight(self.problem, &meas, last, self.hi)
+        });
+        self.reinsert(TrackState {
+            meas,
+            nodes,
+            weight,
+        });
+    }
+
+    /// Adds a track (assumed feasible) whose first `keep` nodes are already in `nodes` (the
+    /// rest is dropped and filtered anew): a move that keeps a prefix hands over the old
+    /// track's buffer instead of copying it.
+    pub(crate) fn insert_into(&mut self, meas: Vec<MeasId>, mut nodes: Vec<Node>, keep: usize) {
+        let keep = keep.min(nodes.len());
+        self.model
+            .filter_track(self.problem, &meas, &mut nodes, keep);
+        let weight = nodes.last().map_or(0.0, |last| {
+            self.model.track_weight(self.problem, &meas, last, self.hi)
+        });
         self.reinsert(TrackState {
             meas,
             nodes,

@@ -58,6 +58,10 @@ pub struct Problem {
     backward: Vec<Vec<MeasId>>,
     /// Reused by [`Self::add_measurement`] (holds nothing between calls).
     scratch: Vec<MeasId>,
+    /// Size of the scan being pushed ([`Self::push_scan_scored`]; 1 for a measurement added
+    /// alone): a forward list is filled by one later scan, so its first entry reserves
+    /// room for that scan's measurements at once instead of growing push by push.
+    scan_size_hint: usize,
 }
 
 impl Problem {
@@ -79,6 +83,7 @@ impl Problem {
             forward: Vec::new(),
             backward: Vec::new(),
             scratch: Vec::new(),
+            scan_size_hint: 1,
         }
     }
 
@@ -97,7 +102,7 @@ impl Problem {
     /// Appends the scan at `frame` (frames skipped before it become empty scans, which cost
     /// nothing to store). Returns the ids given to `points`, in order.
     pub fn push_scan(&mut self, frame: Frame, points: &[Vec2]) -> Result<Vec<MeasId>> {
-        self.push_scan_scored(frame, points, &vec![0.0; points.len()])
+        self.push_scored(frame, points, None)
     }
 
     /// [`Self::push_scan`] with each measurement's score likelihood ratio: `log_score_ratios[i]`
@@ -112,13 +117,27 @@ impl Problem {
         points: &[Vec2],
         log_score_ratios: &[f64],
     ) -> Result<Vec<MeasId>> {
-        if log_score_ratios.len() != points.len() {
+        self.push_scored(frame, points, Some(log_score_ratios))
+    }
+
+    /// [`Self::push_scan_scored`], with all ratios 0 when `log_score_ratios` is `None` (no
+    /// vector of zeros allocated per scan).
+    pub(crate) fn push_scored(
+        &mut self,
+        frame: Frame,
+        points: &[Vec2],
+        log_score_ratios: Option<&[f64]>,
+    ) -> Result<Vec<MeasId>> {
+        let ratio = |i: usize| log_score_ratios.map_or(0.0, |r| r[i]);
+        if let Some(r) = log_score_ratios
+            && r.len() != points.len()
+        {
             return Err(Error::ScoreCount {
                 points: points.len(),
-                scores: log_score_ratios.len(),
+                scores: r.len(),
             });
         }
-        if log_score_ratios.iter().any(|r| !r.is_finite()) {
+        if log_score_ratios.is_some_and(|r| r.iter().any(|r| !r.is_finite())) {
             return Err(Error::Model(tracker_model::Error::NonFinite {
                 what: "log score ratio",
             }));
@@ -138,16 +157,19 @@ impl Problem {
             });
         }
         self.n_scans = (frame - self.first_frame) as usize + 1;
-        points
+        self.scan_size_hint = points.len().max(1);
+        let ids: Result<Vec<MeasId>> = points
             .iter()
-            .zip(log_score_ratios)
-            .map(|(p, &r)| {
+            .enumerate()
+            .map(|(i, p)| {
                 let id = self.add_measurement(frame, *p)?;
                 let slot = self.slot(id);
-                self.log_score_ratios[slot] = r;
+                self.log_score_ratios[slot] = ratio(i);
                 Ok(id)
             })
-            .collect()
+            .collect();
+        self.scan_size_hint = 1;
+        ids
     }
 
     /// Adds one measurement to the existing scan at `frame` (a late measurement joins its own
@@ -209,7 +231,11 @@ impl Problem {
             self.backward[slot * d_bar + d - 1].extend_from_slice(&found);
             for &other in &found {
                 let other = self.slot(other);
-                self.forward[other * d_bar + d - 1].push(id);
+                let list = &mut self.forward[other * d_bar + d - 1];
+                if list.capacity() == 0 {
+                    list.reserve_exact(self.scan_size_hint);
+                }
+                list.push(id);
             }
         }
         self.scratch = found;
@@ -478,6 +504,29 @@ impl Problem {
     #[track_caller]
     pub fn forward(&self, m: MeasId, d: usize) -> &[MeasId] {
         &self.forward[self.slot(m) * self.max_gap + d - 1]
+    }
+
+    /// The d̄ lists [`Self::forward`]`(m, d)`, d = 1..=d̄, at index d − 1 (one look-up of `m`
+    /// for every gap).
+    ///
+    /// # Panics
+    /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
+    #[inline]
+    #[track_caller]
+    pub(crate) fn forward_lists(&self, m: MeasId) -> &[Vec<MeasId>] {
+        let at = self.slot(m) * self.max_gap;
+        &self.forward[at..at + self.max_gap]
+    }
+
+    /// The d̄ lists [`Self::backward`]`(m, d)`, d = 1..=d̄, at index d − 1.
+    ///
+    /// # Panics
+    /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
+    #[inline]
+    #[track_caller]
+    pub(crate) fn backward_lists(&self, m: MeasId) -> &[Vec<MeasId>] {
+        let at = self.slot(m) * self.max_gap;
+        &self.backward[at..at + self.max_gap]
     }
 
     /// The measurements y' of scan t_m − d with y_m ∈ L(y', t_m − d, d) (none once scan

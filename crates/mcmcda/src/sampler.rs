@@ -11,7 +11,8 @@ use crate::config::Move;
 use crate::error::Result;
 use crate::partition::{Partition, TrackState};
 use crate::problem::MeasId;
-use crate::proposal::{End, FirstStep};
+use crate::proposal::{End, FirstStep, ln_count};
+use crate::track_filter::Node;
 
 /// How often each move was proposed and accepted.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -58,6 +59,8 @@ pub struct Chain<'a, R> {
     candidates: Vec<MeasId>,
     grown: Vec<MeasId>,
     from: Vec<MeasId>,
+    /// The nodes a single-track move overwrote (restored if it is rejected).
+    saved_nodes: Vec<Node>,
     /// Tests force acceptance to check that every move's reverse restores ω.
     #[cfg(test)]
     pub(crate) force_accept: bool,
@@ -81,6 +84,7 @@ impl<'a, R: Rng> Chain<'a, R> {
             candidates: Vec::new(),
             grown: Vec::new(),
             from: Vec::new(),
+            saved_nodes: Vec::new(),
             #[cfg(test)]
             force_accept: false,
             #[cfg(test)]
@@ -240,7 +244,7 @@ impl<'a, R: Rng> Chain<'a, R> {
         );
         let log_q_forward = s.log_birth_probability(&track);
         let k_new = s.n_tracks() + 1;
-        let log_q_reverse = s.model.move_probability(Move::Death, k_new).ln() - (k_new as f64).ln();
+        let log_q_reverse = s.model.log_move_probability(Move::Death, k_new) - ln_count(k_new);
         self.state.insert(track, None);
         let delta = self.state.tracks[k_new - 1].weight;
         if self.accept(delta, log_q_forward, log_q_reverse) {
@@ -254,8 +258,7 @@ impl<'a, R: Rng> Chain<'a, R> {
     fn death(&mut self) -> Outcome {
         let k = self.state.n_tracks();
         let victim = self.rng.random_range(0..k);
-        let log_q_forward =
-            self.state.model.move_probability(Move::Death, k).ln() - (k as f64).ln();
+        let log_q_forward = self.state.model.log_move_probability(Move::Death, k) - ln_count(k);
         let old = self.state.remove(victim);
         let log_q_reverse = self.state.log_birth_probability(&old.meas);
         if self.accept(-old.weight, log_q_forward, log_q_reverse) {
@@ -285,19 +288,44 @@ impl<'a, R: Rng> Chain<'a, R> {
         }) else {
             return Outcome::Rejected;
         };
-        let log_q_forward = s.model.move_probability(Move::Split, k).ln() - (n_split as f64).ln();
-        let old = self.state.remove(victim);
+        let log_q_forward = s.model.log_move_probability(Move::Split, k) - ln_count(n_split);
+        let mut old = self.state.remove(victim);
         let head = old.meas[..cut].to_vec();
         let tail = old.meas[cut..].to_vec();
-        self.state.insert(head, Some((&old.nodes, cut)));
+        // The head keeps the old track's first `cut` nodes: when they are most of it, it
+        // takes over the old buffer and only the nodes after the cut are saved (a long
+        // track's prefix is not copied); otherwise the short prefix is copied.
+        let keep = self.state.model.reusable_prefix(cut.min(old.nodes.len()));
+        let handed_over = keep >= old.nodes.len() - keep;
+        if handed_over {
+            self.saved_nodes.clear();
+            self.saved_nodes.extend_from_slice(&old.nodes[keep..]);
+            let nodes = std::mem::take(&mut old.nodes);
+            self.state.insert_into(head, nodes, keep);
+        } else {
+            self.state.insert(head, Some((&old.nodes, cut)));
+        }
         self.state.insert(tail, None);
         let s = &self.state;
         let head_index = k - 1;
-        let log_q_reverse = s.model.move_probability(Move::Merge, k + 1).ln()
-            - ((k + 1) as f64).ln()
-            - (s.merge_partner_count(head_index) as f64).ln();
+        let log_q_reverse = s.model.log_move_probability(Move::Merge, k + 1)
+            - ln_count(k + 1)
+            - ln_count(s.merge_partner_count(head_index));
         let delta = s.tracks[k - 1].weight + s.tracks[k].weight - old.weight;
-        self.finish_replacing(delta, log_q_forward, log_q_reverse, 2, vec![old])
+        if !handed_over {
+            return self.finish_replacing(delta, log_q_forward, log_q_reverse, 2, vec![old]);
+        }
+        if self.accept(delta, log_q_forward, log_q_reverse) {
+            return Outcome::Accepted;
+        }
+        // As `finish_replacing`: the new tracks go (last first), the old one comes back.
+        self.state.remove(k);
+        let mut nodes = self.state.remove(k - 1).nodes;
+        nodes.truncate(keep);
+        nodes.extend_from_slice(&self.saved_nodes);
+        old.nodes = nodes;
+        self.state.reinsert(old);
+        Outcome::Rejected
     }
 
     fn merge(&mut self) -> Outcome {
@@ -317,19 +345,33 @@ impl<'a, R: Rng> Chain<'a, R> {
             }
             i += 1;
         });
-        let log_q_forward = s.model.move_probability(Move::Merge, k).ln()
-            - (k as f64).ln()
-            - (n_partners as f64).ln();
-        let (a, b) = self.remove_pair(first, second);
+        let log_q_forward =
+            s.model.log_move_probability(Move::Merge, k) - ln_count(k) - ln_count(n_partners);
+        let (mut a, b) = self.remove_pair(first, second);
         let mut joined = a.meas.clone();
         joined.extend_from_slice(&b.meas);
-        let keep = a.meas.len();
-        self.state.insert(joined, Some((&a.nodes, keep)));
+        // The joined track keeps all of a's nodes: it takes over a's buffer (no copy of a
+        // long track), and a rejection cuts it back to them.
+        let keep = self
+            .state
+            .model
+            .reusable_prefix(a.meas.len().min(a.nodes.len()));
+        let nodes = std::mem::take(&mut a.nodes);
+        self.state.insert_into(joined, nodes, keep);
         let s = &self.state;
         let log_q_reverse =
-            s.model.move_probability(Move::Split, k - 1).ln() - (s.split_count() as f64).ln();
+            s.model.log_move_probability(Move::Split, k - 1) - ln_count(s.split_count());
         let delta = s.tracks[k - 2].weight - a.weight - b.weight;
-        self.finish_replacing(delta, log_q_forward, log_q_reverse, 1, vec![a, b])
+        if self.accept(delta, log_q_forward, log_q_reverse) {
+            return Outcome::Accepted;
+        }
+        // As `finish_replacing`: the joined track goes, a and b come back in that order.
+        let mut nodes = self.state.remove(k - 2).nodes;
+        nodes.truncate(keep);
+        a.nodes = nodes;
+        self.state.reinsert(a);
+        self.state.reinsert(b);
+        Outcome::Rejected
     }
 
     /// Extension, reduction or update of one track at its tail or (mirrored in time) its
@@ -409,9 +451,34 @@ impl<'a, R: Rng> Chain<'a, R> {
             .zip(&new)
             .take_while(|(a, b)| a == b)
             .count();
-        self.state.insert(new, Some((&old.nodes, keep)));
+        let keep = self.state.model.reusable_prefix(keep.min(old.nodes.len()));
+        if keep < old.nodes.len() - keep {
+            // Most of the track changes (a head move): copy the short kept prefix.
+            self.state.insert(new, Some((&old.nodes, keep)));
+            let delta = self.state.tracks[k - 1].weight - old.weight;
+            return self.finish_replacing(delta, log_q_forward, log_q_reverse, 1, vec![old]);
+        }
+        // Most of the track is kept: the new track takes over the old one's filtered nodes
+        // (no copy of the kept prefix, which is most of a long track); the nodes it
+        // overwrites are saved, so that a rejection puts the old track back exactly.
+        let mut old = old;
+        self.saved_nodes.clear();
+        self.saved_nodes.extend_from_slice(&old.nodes[keep..]);
+        let nodes = std::mem::take(&mut old.nodes);
+        self.state.insert_into(new, nodes, keep);
         let delta = self.state.tracks[k - 1].weight - old.weight;
-        self.finish_replacing(delta, log_q_forward, log_q_reverse, 1, vec![old])
+        if self.accept(delta, log_q_forward, log_q_reverse) {
+            return Outcome::Accepted;
+        }
+        let rejected = self.state.remove(k - 1);
+        let mut nodes = rejected.nodes;
+        nodes.truncate(keep);
+        nodes.extend_from_slice(&self.saved_nodes);
+        old.nodes = nodes;
+        self.state.reinsert(old);
+        // The rejected track's buffer holds the next proposal.
+        self.grown = rejected.meas;
+        Outcome::Rejected
     }
 
     fn switch(&mut self) -> Outcome {

@@ -1749,3 +1749,100 @@ fn single_track_q_by_suffix_sums_equals_the_sum_over_prefixes() {
         assert!(finite > 100, "{finite} of {compared} comparisons finite");
     }
 }
+
+/// The suffix sums of the single-track q stop once every remaining term is below 2⁻⁵⁴ of the
+/// largest (proposal.rs, `one_end_terms`): on long tracks (two walkers over 160 scans, where
+/// it stops early) the result must be bit for bit the full loop's, and agree with the
+/// term-by-term sum over prefixes.
+#[test]
+fn single_track_q_stops_early_with_the_full_sums_bits() {
+    use crate::proposal::{EARLY_STOP, EARLY_STOPS, End, FirstStep};
+    use rand::RngExt;
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let mut truth: Vec<Vec<u32>> = vec![Vec::new(); 2];
+    let mut id = 0u32;
+    let scans: Vec<Scan> = (0..160u32)
+        .map(|f| {
+            let t = f64::from(f);
+            let mut points = Vec::new();
+            for (w, track) in truth.iter_mut().enumerate() {
+                if rng.random_bool(0.85) {
+                    let w = w as f64;
+                    points.push((40.0 * w + 5.0 * t, 30.0 + 25.0 * w + (w - 0.5) * 0.2 * t));
+                    track.push(id);
+                    id += 1;
+                }
+            }
+            if rng.random_bool(0.5) {
+                points.push((rng.random_range(0.0..900.0), rng.random_range(0.0..100.0)));
+                id += 1;
+            }
+            scan(f, &points)
+        })
+        .collect();
+    let model = McmcdaConfig {
+        max_speed: 30.0,
+        max_gap: 4,
+        head_probability: 0.5,
+        ..McmcdaConfig::default()
+    }
+    .check()
+    .unwrap();
+    let problem = Problem::from_scans(&model, &scans).unwrap();
+    let start =
+        Partition::from_tracks(&model, &problem, problem.all_scans().unwrap(), &truth).unwrap();
+    let stops_before = EARLY_STOPS.with(std::cell::Cell::get);
+    let mut finite = 0;
+    for k in 0..start.n_tracks() {
+        let mut state = start.clone();
+        let from = state.remove(k).meas;
+        for _ in 0..40 {
+            let end = if rng.random_bool(0.5) {
+                End::Tail
+            } else {
+                End::Head
+            };
+            let mut order = from.clone();
+            if end == End::Head {
+                order.reverse();
+            }
+            let r = rng.random_range(1..=order.len());
+            let mut to = order[..r].to_vec();
+            state.grow(
+                order[r - 1],
+                end,
+                FirstStep::of_update(r),
+                &mut to,
+                &mut Vec::new(),
+                &mut rng,
+            );
+            if end == End::Head {
+                to.reverse();
+            }
+            if to.len() < 2 {
+                continue;
+            }
+            let n = start.n_tracks();
+            for (a, b) in [(&from, &to), (&to, &from)] {
+                let fast = state.log_single_track_probability(n, a, b);
+                EARLY_STOP.with(|e| e.set(false));
+                let full = state.log_single_track_probability(n, a, b);
+                EARLY_STOP.with(|e| e.set(true));
+                assert_eq!(fast.to_bits(), full.to_bits(), "{fast} vs {full}");
+                let slow = single_track_q_by_prefixes(&state, n, a, b);
+                if slow.is_finite() {
+                    finite += 1;
+                    assert!(
+                        (fast - slow).abs() < 1e-9 * slow.abs().max(1.0),
+                        "{fast} vs {slow}"
+                    );
+                } else {
+                    assert!(fast.is_infinite() && fast < 0.0, "{fast}");
+                }
+            }
+        }
+    }
+    let stops = EARLY_STOPS.with(std::cell::Cell::get) - stops_before;
+    assert!(finite > 40, "{finite} finite comparisons");
+    assert!(stops > 20, "the sums stopped early only {stops} times");
+}
