@@ -194,7 +194,7 @@ fn no_track_from_detections_says_why() {
         );
     }
     let warning = empty_output_warning(Tracker::Phd, &rows, &effective, &TrackSet::new()).unwrap();
-    assert!(warning.contains("extraction_threshold = 0.5"), "{warning}");
+    assert!(warning.contains("extraction_threshold = 0.3"), "{warning}");
 }
 
 fn det(frame: Frame, left: f64, top: f64, w: f64, h: f64) -> MotRow {
@@ -602,8 +602,8 @@ fn walker_with_a_gap(gap: std::ops::RangeInclusive<Frame>) -> Vec<MotRow> {
 #[test]
 fn phd_tracks_coast_through_empty_frames_in_closed_form() {
     // Frames 13-16 hold no row: the filter jumps them in one prediction, and a confirmed
-    // track whose label holds its mass is output there from the label's mean moved by the
-    // motion model. (The slow walker's track, whose estimates took a label holding 7 % of
+    // track whose label holds its mass is output there from its own constant-velocity
+    // prediction. (The slow walker's track, whose estimates took a label holding 7 % of
     // their mass, may end at the gap, as stepping the empty frames would.)
     let rows = walker_with_a_gap(13..=16);
     let tracks = track_detections(Tracker::Phd, &rows, &TrackConfig::default(), 3).unwrap();
