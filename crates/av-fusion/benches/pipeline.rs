@@ -56,6 +56,7 @@ fn sensors() -> Vec<SensorNode> {
             clock_offset_s: 0.0,
             weight: 1.0,
             exponent: 1.0,
+            lobes: None,
         });
     }
     out

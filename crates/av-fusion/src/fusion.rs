@@ -103,6 +103,18 @@ pub struct PeakExtraction {
     /// target outside the region pulls the likelihood up towards the edge, and the edge
     /// cells then hold a local maximum that is not a target inside (0 keeps them).
     pub border_cells: usize,
+    /// Explaining away, degrees (0: off, plain NMS on the fused grid). When > 0, peaks are
+    /// taken one at a time: after each, every sensor's grid is multiplied by the notch
+    /// 1 − exp(−½ (Δθ/σ)²), Δθ the angle at the sensor between a cell and the peak,
+    /// σ = `explain_away_deg`, the grids are fused again and the strongest peak of this
+    /// residual (not within the NMS radius of a kept peak, and with a value in the original
+    /// fused grid of at least κ × its maximum) is the next. Two vehicles whose beams merge in
+    /// some sensors leave one broad maximum in the fused grid; once the first is explained
+    /// away, the sensors that do separate them carry the second (the successive cancellation
+    /// of CLEAN-like multi-source localisation, our choice; the paper's extraction is not
+    /// known to us). Its shape, and so its position and covariance, come from the residual.
+    #[serde(default)]
+    pub explain_away_deg: f64,
 }
 
 impl Default for PeakExtraction {
@@ -115,6 +127,7 @@ impl Default for PeakExtraction {
             moment_fraction: 0.5,
             max_peaks: 8,
             border_cells: 1,
+            explain_away_deg: 0.0,
         }
     }
 }
@@ -164,6 +177,7 @@ impl FusionConfig {
         ensure_non_negative(p.min_contrast, "min_contrast")?;
         ensure_non_negative(p.suppression_radius_m, "suppression_radius_m")?;
         ensure_positive(p.moment_radius_m, "moment_radius_m")?;
+        ensure_non_negative(p.explain_away_deg, "explain_away_deg")?;
         ensure_in_range(p.moment_fraction, 0.0, 1.0, "moment_fraction")?;
         if p.moment_fraction >= 1.0 {
             return Err(invalid("moment_fraction", "must be below 1"));
@@ -245,7 +259,11 @@ pub fn fuse_snapshot(
         grids.iter().map(|(_, w, g)| (g, *w)),
         config.rule,
     )?;
-    let peaks = extract_peaks(&grid, &config.peaks)?;
+    let peaks = if config.peaks.explain_away_deg > 0.0 {
+        explain_away(sensors, &grids, &grid, config)?
+    } else {
+        extract_peaks(&grid, &config.peaks)?
+    };
     Ok(FusedScan {
         tick: snapshot.tick,
         time_s: snapshot.time_s,
@@ -255,28 +273,96 @@ pub fn fuse_snapshot(
     })
 }
 
-/// Fuses unnormalised grids (all over `region` with cells of `cell_size_m`) with their
-/// weights by `rule`; the result sums to 1, or is all zero when no grid carries evidence.
-pub fn fuse_grids<'a>(
-    region: Region2,
-    cell_size_m: f64,
-    grids: impl IntoIterator<Item = (&'a LikelihoodGrid, f64)>,
+/// Peaks by explaining away (see [`PeakExtraction::explain_away_deg`]): `grids` are the
+/// sensors' projections (sensor, weight, grid), `fused` their fusion.
+fn explain_away(
+    sensors: &[SensorNode],
+    grids: &[(usize, f64, LikelihoodGrid)],
+    fused: &LikelihoodGrid,
+    config: &FusionConfig,
+) -> Result<Vec<PeakMeasurement>> {
+    let pc = &config.peaks;
+    let Some(first) = extract_peaks(fused, pc)?.into_iter().next() else {
+        return Ok(Vec::new());
+    };
+    let top = fused.values().iter().copied().fold(0.0, f64::max);
+    let (cols, rows) = fused.shape();
+    let centres: Vec<Vec2> = (0..rows)
+        .flat_map(|r| (0..cols).map(move |c| (c, r)))
+        .map(|(c, r)| fused.cell_centre(c, r))
+        .collect();
+    let mut residual: Vec<Vec<f64>> = grids.iter().map(|(_, _, g)| g.values().to_vec()).collect();
+    let sigma = pc.explain_away_deg.to_radians();
+    let mut kept = vec![first];
+    while kept.len() < pc.max_peaks {
+        let Some(last) = kept.last().map(|p| p.position) else {
+            break;
+        };
+        residual
+            .par_iter_mut()
+            .zip(grids)
+            .for_each(|(values, (s, _, _))| {
+                let at = sensors[*s].pose.position;
+                let d = last - at;
+                let peak_bearing = d.y.atan2(d.x);
+                for (v, c) in values.iter_mut().zip(&centres) {
+                    let e = c - at;
+                    let off = tracker_model::wrap_angle_rad(e.y.atan2(e.x) - peak_bearing) / sigma;
+                    *v *= 1.0 - (-0.5 * off * off).exp();
+                }
+            });
+        let mut grid = LikelihoodGrid::zeros(config.region, config.cell_size_m)?;
+        let Some(acc) = fuse_values(
+            cols * rows,
+            residual
+                .iter()
+                .zip(grids)
+                .map(|(v, (_, w, _))| (v.as_slice(), *w)),
+            config.rule,
+        )?
+        else {
+            break;
+        };
+        for row in 0..rows {
+            for col in 0..cols {
+                grid.set(col, row, acc[row * cols + col])?;
+            }
+        }
+        let r2 = pc.suppression_radius_m * pc.suppression_radius_m;
+        let next = extract_peaks(
+            &grid,
+            &PeakExtraction {
+                max_peaks: usize::MAX,
+                ..*pc
+            },
+        )?
+        .into_iter()
+        .find(|q| {
+            kept.iter()
+                .all(|k| (k.position - q.position).norm_squared() >= r2)
+                && fused
+                    .cell_of(&q.position)
+                    .is_some_and(|(c, r)| fused.value(c, r) >= pc.relative_threshold * top)
+        });
+        match next {
+            Some(q) => kept.push(q),
+            None => break,
+        }
+    }
+    Ok(kept)
+}
+
+/// The fused values (summing to 1) of per-sensor value slices of `n` cells with their weights
+/// by `rule`; `None` when no slice carries evidence.
+fn fuse_values<'a>(
+    n: usize,
+    grids: impl IntoIterator<Item = (&'a [f64], f64)>,
     rule: FusionRule,
-) -> Result<LikelihoodGrid> {
-    let mut out = LikelihoodGrid::zeros(region, cell_size_m)?;
-    let (cols, rows) = out.shape();
-    let n = cols * rows;
+) -> Result<Option<Vec<f64>>> {
     let mut acc = vec![0.0; n];
     let mut any = false;
-    for (g, w) in grids {
-        if g.shape() != (cols, rows) || g.region() != &region {
-            return Err(tracker_model::Error::ShapeMismatch(
-                "a sensor grid does not cover the fusion grid's cells".into(),
-            )
-            .into());
-        }
+    for (v, w) in grids {
         ensure_non_negative(w, "fusion weight")?;
-        let v = g.values();
         match rule {
             FusionRule::WeightedSum { scaling } => {
                 let total: f64 = match scaling {
@@ -302,20 +388,47 @@ pub fn fuse_grids<'a>(
         }
     }
     if !any {
-        return Ok(out);
+        return Ok(None);
     }
     if let FusionRule::Product { .. } = rule {
         let top = acc.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         if top == f64::NEG_INFINITY {
             // Every cell vetoed by some sensor (ε = 0): no evidence anywhere.
-            return Ok(out);
+            return Ok(None);
         }
         acc.iter_mut().for_each(|a| *a = (*a - top).exp());
     }
     let total: f64 = acc.iter().sum();
+    acc.iter_mut().for_each(|a| *a /= total);
+    Ok(Some(acc))
+}
+
+/// Fuses unnormalised grids (all over `region` with cells of `cell_size_m`) with their
+/// weights by `rule`; the result sums to 1, or is all zero when no grid carries evidence.
+pub fn fuse_grids<'a>(
+    region: Region2,
+    cell_size_m: f64,
+    grids: impl IntoIterator<Item = (&'a LikelihoodGrid, f64)>,
+    rule: FusionRule,
+) -> Result<LikelihoodGrid> {
+    let mut out = LikelihoodGrid::zeros(region, cell_size_m)?;
+    let (cols, rows) = out.shape();
+    let mut checked = Vec::new();
+    for (g, w) in grids {
+        if g.shape() != (cols, rows) || g.region() != &region {
+            return Err(tracker_model::Error::ShapeMismatch(
+                "a sensor grid does not cover the fusion grid's cells".into(),
+            )
+            .into());
+        }
+        checked.push((g.values(), w));
+    }
+    let Some(acc) = fuse_values(cols * rows, checked, rule)? else {
+        return Ok(out);
+    };
     for row in 0..rows {
         for col in 0..cols {
-            out.set(col, row, acc[row * cols + col] / total)?;
+            out.set(col, row, acc[row * cols + col])?;
         }
     }
     Ok(out)

@@ -7,7 +7,8 @@
 //! tracks the grid's peaks with online MCMCDA. Our reconstruction is algorithms.md §5.4;
 //! choices and numbers in `docs/av-fusion.md`.
 //!
-//! * [`SensorNode`] (kind, believed pose, profile layout, clock offset, weight) and
+//! * [`SensorNode`] (kind, believed pose, profile layout, clock offset, weight, profile
+//!   exponent, optional [`LobeEqualisation`] that lifts a profile's weaker lobes) and
 //!   [`Report`] (values at a time stamp of the node's own clock; [`Report::from_beamform`]);
 //! * [`FusionNode`]: a [`SensorBuffer`] per sensor (circular, kept in time order so late
 //!   reports take their place), and [`SchedulerConfig`]: ticks at a fixed rate, each taking
@@ -17,7 +18,8 @@
 //!   [`BearingProfile::project`](tracker_model::BearingProfile::project), fused by
 //!   [`FusionRule::WeightedSum`] (each grid scaled to max 1 or sum 1, [`SumScaling`]) or [`FusionRule::Product`] (with a configurable floor so that
 //!   one sensor that sees nothing does not zero the grid), peaks by non-maximum suppression
-//!   with covariances from the peak's second moments ([`PeakMeasurement`]);
+//!   with covariances from the peak's second moments ([`PeakMeasurement`]), optionally one at
+//!   a time by explaining away ([`PeakExtraction::explain_away_deg`]);
 //! * [`AvPipeline`] / [`track_reports`]: the peak lists through
 //!   [`mcmcda::OnlineTracker`] into a [`tracker_model::TrackSet`] whose frames are the ticks.
 //!
@@ -117,5 +119,5 @@ pub use fusion::{
     FusedScan, FusionConfig, FusionRule, Modalities, PeakExtraction, PeakMeasurement, SumScaling,
     extract_peaks, fuse_grids, fuse_snapshot,
 };
-pub use node::{ProfileShape, Report, SensorKind, SensorNode};
+pub use node::{LobeEqualisation, ProfileShape, Report, SensorKind, SensorNode};
 pub use tracker::{AvConfig, AvPipeline, AvRun, TrackerConfig, track_reports};

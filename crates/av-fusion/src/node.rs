@@ -77,6 +77,98 @@ pub struct SensorNode {
     /// width, in the product it acts before the floor (unlike w_s, which acts after it).
     #[serde(default = "unit_exponent")]
     pub exponent: f64,
+    /// Lobe equalisation, applied before the exponent (`None`: the profile as reported).
+    /// See [`LobeEqualisation`].
+    #[serde(default)]
+    pub lobes: Option<LobeEqualisation>,
+}
+
+/// Lifts a profile's weaker lobes towards its strongest, so that a second target's lobe
+/// survives sharpening and fusion.
+///
+/// Every bin belongs to the lobe of the local maximum it climbs to (steepest ascent over its
+/// neighbours, around the circle for a full-circle profile). With P the profile's maximum and
+/// p_ℓ the peak of bin b's lobe, the value becomes
+/// D'(b) = D(b) · (P / max(p_ℓ, η P))^β:
+/// a lobe at least η P high is scaled by (P / p_ℓ)^β (β = 1: every such lobe reaches P, so a
+/// quieter vehicle's beam is as tall as the louder one's; β = 0: unchanged), while the lobes
+/// below η P, mostly noise, gain at most the factor η^{−β}. A profile raised to γ > 1 keeps
+/// only its strongest lobe (a second at a half the height is at 0.5⁸ ≈ 0.004 under γ = 8); after
+/// equalisation every lobe keeps its own width and is sharpened around its own peak.
+/// A single lobe is unchanged (p_ℓ = P).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LobeEqualisation {
+    /// η ∈ (0, 1]: lobes below η × the maximum are not lifted to it.
+    pub min_fraction: f64,
+    /// β ∈ [0, 1]: how far a lobe is lifted (1: to the maximum).
+    pub power: f64,
+}
+
+impl LobeEqualisation {
+    /// Checks η ∈ (0, 1] and β ∈ [0, 1].
+    pub fn check(&self) -> Result<()> {
+        if !(self.min_fraction > 0.0 && self.min_fraction <= 1.0) {
+            return Err(invalid(
+                "min_fraction",
+                format!("{} is outside (0, 1]", self.min_fraction),
+            ));
+        }
+        if !(self.power.is_finite() && (0.0..=1.0).contains(&self.power)) {
+            return Err(invalid(
+                "power",
+                format!("{} is outside [0, 1]", self.power),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Equalises `values` in place (`circular`: the first and last bins are neighbours).
+    /// Values must be finite and ≥ 0 (reports are checked on arrival).
+    pub fn apply(&self, values: &mut [f64], circular: bool) {
+        let n = values.len();
+        let top = values.iter().copied().fold(0.0, f64::max);
+        if n < 2 || top <= 0.0 {
+            return;
+        }
+        // The uphill neighbour of each bin (itself at a local maximum or plateau).
+        let neighbours = |b: usize| -> [Option<usize>; 2] {
+            let left = if b > 0 {
+                Some(b - 1)
+            } else {
+                circular.then_some(n - 1)
+            };
+            let right = if b + 1 < n {
+                Some(b + 1)
+            } else {
+                circular.then_some(0)
+            };
+            [left, right]
+        };
+        let up: Vec<usize> = (0..n)
+            .map(|b| {
+                let mut best = b;
+                for c in neighbours(b).into_iter().flatten() {
+                    if values[c] > values[best] {
+                        best = c;
+                    }
+                }
+                best
+            })
+            .collect();
+        let floor = self.min_fraction * top;
+        let scaled: Vec<f64> = (0..n)
+            .map(|b| {
+                // Climb to the lobe's peak: each step is strictly uphill, so at most n steps.
+                let mut m = b;
+                while up[m] != m {
+                    m = up[m];
+                }
+                values[b] * (top / values[m].max(floor)).powf(self.power)
+            })
+            .collect();
+        values.copy_from_slice(&scaled);
+    }
 }
 
 fn unit_exponent() -> f64 {
@@ -94,6 +186,7 @@ impl SensorNode {
             clock_offset_s: 0.0,
             weight: 1.0,
             exponent: 1.0,
+            lobes: None,
         }
     }
 
@@ -118,6 +211,7 @@ impl SensorNode {
             clock_offset_s: 0.0,
             weight: 1.0,
             exponent: 1.0,
+            lobes: None,
         }
     }
 
@@ -139,6 +233,9 @@ impl SensorNode {
         }
         ensure_non_negative(self.weight, "weight")?;
         tracker_model::ensure_positive(self.exponent, "exponent")?;
+        if let Some(l) = &self.lobes {
+            l.check()?;
+        }
         if self.shape.n_bins() == 0 {
             return Err(invalid(
                 "n_bins",
@@ -159,9 +256,16 @@ impl SensorNode {
         Ok(())
     }
 
-    /// The report's values, raised to the node's exponent γ_s, as a bearing profile at this
+    /// The report's values, lobe-equalised if the node says so and raised to the node's
+    /// exponent γ_s, as a bearing profile at this
     /// node's believed pose.
     pub fn profile(&self, mut values: Vec<f64>) -> Result<BearingProfile> {
+        if let Some(l) = &self.lobes {
+            l.apply(
+                &mut values,
+                matches!(self.shape, ProfileShape::FullCircle { .. }),
+            );
+        }
         // Values are ≥ 0 (checked on arrival); the max-1 or sum-1 scaling of the fusion
         // removes the factor c^γ a rescaled report would bring. γ = 1 exactly skips the powf,
         // so such nodes give the same bytes as before γ existed.

@@ -311,6 +311,7 @@ fn peak_covariance_is_the_shape_second_moment() {
         moment_fraction: 0.0,
         max_peaks: 4,
         border_cells: 0,
+        explain_away_deg: 0.0,
     };
     let peaks = extract_peaks(&grid, &config).expect("peaks");
     assert_eq!(peaks.len(), 1);
@@ -361,6 +362,7 @@ fn road_sensors() -> Vec<SensorNode> {
             clock_offset_s: 0.0,
             weight: 1.0,
             exponent: 1.0,
+            lobes: None,
         });
     }
     sensors
@@ -530,4 +532,116 @@ fn the_exponent_sharpens_a_profile_in_closed_form() {
         node.exponent = bad;
         assert!(node.check().is_err(), "exponent {bad} accepted");
     }
+}
+
+#[test]
+fn lobe_equalisation_lifts_each_lobe_to_the_maximum_by_hand() {
+    // Two lobes on a circle of 8 bins: peaks 4 (bin 1) and 1 (bin 5). Steepest ascent: the
+    // valley bin 3 (0.5) has neighbours 1.0 (bin 2) and 0.8 (bin 4), so it climbs to bin 2
+    // and belongs to the first lobe; bin 7 (0.1) climbs to bin 0 (2.0), the first lobe too.
+    let values = [2.0, 4.0, 1.0, 0.5, 0.8, 1.0, 0.6, 0.1];
+    // Lobes: bins 7, 0, 1, 2, 3 → peak 4; bins 4, 5, 6 → peak 1. With η = 0.2 (floor 0.8)
+    // and β = 1 the second lobe is scaled by 4/1, the first by 1.
+    let l = LobeEqualisation {
+        min_fraction: 0.2,
+        power: 1.0,
+    };
+    l.check().expect("valid");
+    let mut v = values;
+    l.apply(&mut v, true);
+    let want = [2.0, 4.0, 1.0, 0.5, 3.2, 4.0, 2.4, 0.1];
+    for (g, w) in v.iter().zip(&want) {
+        assert!((g - w).abs() < 1e-12, "{v:?} vs {want:?}");
+    }
+    // η = 0.5 (floor 2): the second lobe is scaled by 4/2 only; β = 0.5 by (4/1)^0.5 = 2 too.
+    for l in [
+        LobeEqualisation {
+            min_fraction: 0.5,
+            power: 1.0,
+        },
+        LobeEqualisation {
+            min_fraction: 0.2,
+            power: 0.5,
+        },
+    ] {
+        let mut v = values;
+        l.apply(&mut v, true);
+        let want = [2.0, 4.0, 1.0, 0.5, 1.6, 2.0, 1.2, 0.1];
+        for (g, w) in v.iter().zip(&want) {
+            assert!((g - w).abs() < 1e-12, "{l:?}: {v:?} vs {want:?}");
+        }
+    }
+    // Not circular: bin 7 (0.1) has only bin 6 (0.6) beside it, so it climbs into the
+    // second lobe and is scaled by 4/1; bin 0 has only bin 1 and stays in the first.
+    let mut v = values;
+    l.apply(&mut v, false);
+    assert!(
+        (v[7] - 0.4).abs() < 1e-12 && (v[0] - 2.0).abs() < 1e-12,
+        "{v:?}"
+    );
+    // A single lobe is unchanged; an all-zero profile stays zero; bad η, β are rejected.
+    let one = [0.0, 1.0, 3.0, 1.0, 0.0];
+    let mut v = one;
+    l.apply(&mut v, false);
+    assert!(
+        v.iter().zip(&one).all(|(a, b)| a.to_bits() == b.to_bits()),
+        "{v:?}"
+    );
+    let mut z = [0.0; 4];
+    l.apply(&mut z, true);
+    assert!(z.iter().all(|x| x.to_bits() == 0), "{z:?}");
+    for (eta, beta) in [
+        (0.0, 1.0),
+        (1.5, 1.0),
+        (0.3, -0.1),
+        (0.3, 1.5),
+        (f64::NAN, 1.0),
+    ] {
+        let bad = LobeEqualisation {
+            min_fraction: eta,
+            power: beta,
+        };
+        assert!(bad.check().is_err(), "η {eta}, β {beta} accepted");
+    }
+}
+
+#[test]
+fn explaining_away_finds_the_second_target_with_the_first_removed() {
+    // Three nodes, two targets, the second at 0.4 of the first's amplitude in every profile
+    // (Gaussian beams of 4°). After the first peak (the strong target) is explained away, the
+    // strongest residual peak is the weak target; plain NMS with κ = 0.5 sees only the
+    // strong one (the weak one's product is 0.4³ ≈ 0.06 of it).
+    let sensors: Vec<SensorNode> = [(5.0, 4.0), (30.0, 4.0), (17.5, 16.0)]
+        .iter()
+        .enumerate()
+        .map(|(i, &(x, y))| SensorNode::audio(format!("a{i}"), pose(x, y, 0.0), 360))
+        .collect();
+    let (strong, weak) = (Vec2::new(12.0, 9.0), Vec2::new(22.0, 11.0));
+    let mut node = FusionNode::new(sensors.clone(), scheduler()).expect("valid node");
+    for (i, s) in sensors.iter().enumerate() {
+        let a = bump(s, bearing_to(s, strong), 4.0 * DEG);
+        let b = bump(s, bearing_to(s, weak), 4.0 * DEG);
+        let values = a.iter().zip(&b).map(|(x, y)| x + 0.4 * y).collect();
+        node.receive(report(i, 0.0, values)).expect("ok");
+    }
+    let mut config = fusion_config(FusionRule::Product { floor: 0.01 });
+    config.peaks.relative_threshold = 0.5;
+    config.peaks.moment_fraction = 0.8;
+    config.peaks.moment_radius_m = 1.0;
+    let plain = fuse_snapshot(&sensors, &node.snapshot(0), &config).expect("fuses");
+    assert_eq!(plain.peaks.len(), 1, "{:?}", plain.peaks);
+    // The original-grid test needs κ below the weak target's 0.4³ relative value.
+    config.peaks.relative_threshold = 0.03;
+    config.peaks.explain_away_deg = 6.0;
+    let fused = fuse_snapshot(&sensors, &node.snapshot(0), &config).expect("fuses");
+    assert!(fused.peaks.len() >= 2, "{:?}", fused.peaks);
+    let e1 = (fused.peaks[0].position - strong).norm();
+    let e2 = (fused.peaks[1].position - weak).norm();
+    assert!(
+        e1 < 0.5 && e2 < 0.5,
+        "errors {e1} m, {e2} m: {:?}",
+        fused.peaks
+    );
+    config.peaks.explain_away_deg = -1.0;
+    assert!(config.check().is_err());
 }

@@ -1,0 +1,637 @@
+//! The developer searches behind the scenario's settings (never run by the suite): the
+//! single-vehicle search of `[params.tuning]` (`AV_FUSION_TUNE=1`), the multi-vehicle search
+//! of `[params.multi_tuning]` (`AV_FUSION_TUNE_MULTI=1`, or a comma-separated list of approach
+//! indices) and the multi-vehicle error breakdown (`AV_FUSION_DIAG=seed,seed,...`). All run on
+//! the tuning seeds given; the reported seed is only simulated by the normal run.
+
+use super::*;
+
+/// Setting this environment variable makes the scenario run [`Tuning`]'s grid search on its
+/// tuning seeds first and print it (the reported results do not change).
+pub(super) const TUNE_ENV: &str = "AV_FUSION_TUNE";
+
+/// Averages of one setting over the tuning runs: A+V mean error over the single-vehicle
+/// passes (a pass without a track counts as the match distance) and mean MOTA over all runs.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TuneScore {
+    pub(super) error_m: f64,
+    pub(super) mota: f64,
+    pub(super) multi_mota: f64,
+    /// Multi-vehicle runs: the fraction of (vehicle, tick) pairs with a peak within 2 m, and
+    /// peaks per tick farther than 2 m from every vehicle (is a miss the peaks' fault?).
+    pub(super) peak_recall: f64,
+    pub(super) false_peaks: f64,
+}
+
+/// Peak recall and false peaks per tick of a run (see [`TuneScore`]).
+pub(super) fn peak_counts(sim: &Simulated, run: &av_fusion::AvRun) -> (usize, usize, usize, usize) {
+    let (mut pairs, mut found, mut false_peaks) = (0, 0, 0);
+    for scan in &run.scans {
+        let truth: Vec<Vec2> = sim
+            .gt
+            .tracks()
+            .iter()
+            .filter_map(|t| {
+                t.points()
+                    .iter()
+                    .find(|q| u64::from(q.frame) == scan.tick)
+                    .map(|q| q.location.position())
+            })
+            .collect();
+        pairs += truth.len();
+        found += truth
+            .iter()
+            .filter(|v| scan.peaks.iter().any(|q| (q.position - *v).norm() <= 2.0))
+            .count();
+        false_peaks += scan
+            .peaks
+            .iter()
+            .filter(|q| truth.iter().all(|v| (q.position - v).norm() > 2.0))
+            .count();
+    }
+    (pairs, found, false_peaks, run.scans.len())
+}
+
+pub(super) fn tune_score(p: &Params, sims: &[(bool, Simulated)], a: usize) -> Result<TuneScore> {
+    let scores: Vec<(bool, Score)> = sims
+        .par_iter()
+        // The single-vehicle settings on every run (the search of `[params.tuning]`).
+        .map(|(multi, sim)| {
+            Ok((
+                *multi,
+                score_with(p, sim, nominal(p), a, p.settings.get(a))?,
+            ))
+        })
+        .collect::<Result<_>>()?;
+    let single: Vec<f64> = scores
+        .iter()
+        .filter(|(m, _)| !m)
+        .flat_map(|(_, s)| s.errors.iter().map(|e| e.unwrap_or(p.match_distance_m)))
+        .collect();
+    let multi: Vec<f64> = scores
+        .iter()
+        .filter(|(m, _)| *m)
+        .map(|(_, s)| s.mota)
+        .collect();
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let (mut pairs, mut found, mut false_peaks, mut ticks) = (0, 0, 0, 0);
+    for ((multi, sim), (_, s)) in sims.iter().zip(&scores) {
+        if *multi {
+            let c = peak_counts(sim, &s.result);
+            pairs += c.0;
+            found += c.1;
+            false_peaks += c.2;
+            ticks += c.3;
+        }
+    }
+    Ok(TuneScore {
+        error_m: mean(&single),
+        mota: mean(&scores.iter().map(|(_, s)| s.mota).collect::<Vec<_>>()),
+        multi_mota: mean(&multi),
+        peak_recall: found as f64 / pairs.max(1) as f64,
+        false_peaks: false_peaks as f64 / ticks.max(1) as f64,
+    })
+}
+
+/// Each sensor's bearing error on the single-vehicle passes: the bearing of its profile's
+/// maximum from the believed pose at heading error `calib` against the true bearing of the
+/// vehicle at the report's time, over the reports where the vehicle is inside the region.
+/// Returns (mean, standard deviation) in degrees per sensor, in sensor order.
+pub(super) fn bearing_errors(
+    p: &Params,
+    sims: &[&Simulated],
+    calib: Calibration,
+) -> Result<Vec<(f64, f64)>> {
+    let nodes = sensor_nodes(p, calib, p.settings.get(5))?;
+    let mut acc = vec![Vec::new(); nodes.len()];
+    for sim in sims {
+        let Some(gt) = sim.gt.tracks().first() else {
+            continue;
+        };
+        let pts = gt.points();
+        let (Some(first), Some(last)) = (pts.first(), pts.last()) else {
+            continue;
+        };
+        // The vehicle's straight path from its first and last points.
+        let t0 = p.scheduler.tick_time_s(u64::from(first.frame));
+        let t1 = p.scheduler.tick_time_s(u64::from(last.frame));
+        let (a, b) = (first.location.position(), last.location.position());
+        for r in &sim.reports {
+            let node = &nodes[r.sensor];
+            let t = node.fusion_time_s(r.local_time_s);
+            if !(t0..=t1).contains(&t) || t1 <= t0 {
+                continue;
+            }
+            let pos = a + (b - a) * ((t - t0) / (t1 - t0));
+            let Some((i, _)) = r
+                .values
+                .iter()
+                .enumerate()
+                .max_by(|x, y| x.1.total_cmp(y.1))
+                .filter(|(_, v)| **v > 0.0)
+            else {
+                continue;
+            };
+            let profile = node.profile(r.values.clone())?;
+            let measured = node.pose.heading_rad + profile.bin_angle_rad(i);
+            let d = pos - node.pose.position;
+            let truth = d.y.atan2(d.x);
+            let e = (measured - truth + PI).rem_euclid(2.0 * PI) - PI;
+            acc[r.sensor].push(e * 180.0 / PI);
+        }
+    }
+    Ok(acc
+        .iter()
+        .map(|e| {
+            let n = e.len().max(1) as f64;
+            let m = e.iter().sum::<f64>() / n;
+            let v = e.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n;
+            (m, v.sqrt())
+        })
+        .collect())
+}
+
+/// Stage 1's rule: among the candidates whose error is within the fraction `tolerance` of the
+/// lowest, the one with the highest MOTA (ties keep the earlier). Error differences of a few
+/// millimetres are noise on 27 passes, while a broad profile that tracks a lone vehicle as
+/// well can still cost a great deal of MOTA in false and broken tracks.
+pub(super) fn stage1_choice(
+    candidates: &[(ApproachSettings, TuneScore)],
+    tolerance: f64,
+) -> Option<(ApproachSettings, TuneScore)> {
+    let lowest = candidates
+        .iter()
+        .map(|(_, s)| s.error_m)
+        .fold(f64::INFINITY, f64::min);
+    let mut best: Option<(ApproachSettings, TuneScore)> = None;
+    for (w, s) in candidates {
+        if s.error_m <= lowest * (1.0 + tolerance)
+            && best.as_ref().is_none_or(|b| s.mota > b.1.mota)
+        {
+            best = Some((*w, *s));
+        }
+    }
+    best
+}
+
+/// Grid search on the tuning seeds, run for each of the six approaches on its own, from the
+/// configured values, by the same stages and objectives. Stage 1: the profile exponent γ of
+/// each modality the approach uses, for audio+video the video weight w_v (audio weight 1),
+/// and for the product the floor ε, by the approach's mean error over the single-vehicle
+/// passes (within `error_tolerance` of the lowest, the highest MOTA: [`stage1_choice`]).
+/// Stage 2a, with stage 1's choice: the NMS radius and MCMCDA's p_d and clutter rate by the
+/// approach's mean MOTA over every run (single and multi-vehicle). Stage 2b: the peaks' κ by
+/// the same MOTA. Ties keep the earlier candidate. The stages repeat until a round changes
+/// nothing (at most `max_rounds`).
+#[expect(
+    clippy::print_stderr,
+    reason = "the grid search is a developer command whose table goes to the terminal"
+)]
+pub(super) fn print_tuning(p: &Params, runs: &[RunSpec]) -> Result<()> {
+    let tuned = tune(p, runs)?;
+    eprintln!("{tuned}");
+    Ok(())
+}
+
+#[expect(
+    clippy::print_stderr,
+    reason = "the grid search takes minutes: each line goes to the terminal as it is measured"
+)]
+pub(super) fn tune(p: &Params, runs: &[RunSpec]) -> Result<String> {
+    let t = &p.tuning;
+    ensure!(!t.seeds.is_empty(), "no tuning seeds");
+    let mut sims = Vec::new();
+    for &seed in &t.seeds {
+        let base = ChaCha8Rng::seed_from_u64(seed);
+        let n_passes = p.passes.len();
+        let batch: Vec<(bool, Simulated)> = runs
+            .par_iter()
+            .enumerate()
+            .map(|(i, run)| {
+                let mut rng = base.clone();
+                rng.set_stream(i as u64);
+                Ok((i >= n_passes, simulate_run(p, run, &mut rng)?))
+            })
+            .collect::<Result<_>>()?;
+        sims.extend(batch);
+    }
+    let mut out = format!("av-fusion tuning on seeds {:?}\n", t.seeds);
+    let singles: Vec<&Simulated> = sims.iter().filter(|(m, _)| !m).map(|(_, s)| s).collect();
+    for calib in [
+        Calibration {
+            audio_deg: 0.0,
+            video_deg: 0.0,
+        },
+        nominal(p),
+    ] {
+        let stats = bearing_errors(p, &singles, calib)?;
+        let text: Vec<String> = stats
+            .iter()
+            .map(|(m, s)| format!("{m:+.1}° ± {s:.1}°"))
+            .collect();
+        let text = format!(
+            "bearing error of the profile maximum at {calib:?}: {}",
+            text.join(", ")
+        );
+        eprintln!("{text}");
+        out.push_str(&text);
+        out.push('\n');
+    }
+    // Each line goes to stderr as it is measured (the search takes minutes) and into the table.
+    let line = |out: &mut String, what: String, s: &TuneScore| {
+        let text = format!(
+            "{what}: error {:.3} m, MOTA {:.3} (multi-vehicle {:.3}, peak recall {:.2}, false peaks/tick {:.2})",
+            s.error_m, s.mota, s.multi_mota, s.peak_recall, s.false_peaks
+        );
+        eprintln!("{text}");
+        out.push_str(&text);
+        out.push('\n');
+    };
+    let mut q = p.clone();
+    for (a, (name, modalities, product)) in APPROACHES.iter().enumerate() {
+        let s = tune_score(&q, &sims, a)?;
+        line(&mut out, format!("{name}: as configured"), &s);
+        // The stages are repeated until a round changes nothing (a fixed point) or for
+        // `max_rounds`.
+        for round in 1..=t.max_rounds.max(1) {
+            let before = *q.settings.get(a);
+            let text = format!("{name}: round {round}");
+            eprintln!("{text}");
+            out.push_str(&text);
+            out.push('\n');
+            // Stage 1: the grid of the parameters this approach uses (a single value elsewhere).
+            let uses_audio = *modalities != Modalities::Video;
+            let uses_video = *modalities != Modalities::Audio;
+            let configured = *q.settings.get(a);
+            let video_weights: Vec<f64> = if *modalities == Modalities::Both {
+                t.video_weight.clone()
+            } else {
+                vec![configured.video_weight]
+            };
+            let audio_exponents = if uses_audio {
+                t.audio_exponent.clone()
+            } else {
+                vec![configured.audio_exponent]
+            };
+            let video_exponents = if uses_video {
+                t.video_exponent.clone()
+            } else {
+                vec![configured.video_exponent]
+            };
+            let floors: Vec<Option<f64>> = if *product {
+                t.product_floor.iter().copied().map(Some).collect()
+            } else {
+                vec![None]
+            };
+            let mut candidates: Vec<(ApproachSettings, TuneScore)> = Vec::new();
+            for &video_weight in &video_weights {
+                for &audio_exponent in &audio_exponents {
+                    for &video_exponent in &video_exponents {
+                        for &product_floor in &floors {
+                            let w = ApproachSettings {
+                                audio_weight: 1.0,
+                                video_weight,
+                                audio_exponent,
+                                video_exponent,
+                                product_floor,
+                                ..configured
+                            };
+                            let mut c = q.clone();
+                            *c.settings.get_mut(a) = w;
+                            let s = tune_score(&c, &sims, a)?;
+                            line(
+                                &mut out,
+                                format!(
+                                    "stage 1 {name}: w_v {video_weight}, gamma_a {audio_exponent}, gamma_v {video_exponent}, floor {product_floor:?}"
+                                ),
+                                &s,
+                            );
+                            candidates.push((w, s));
+                        }
+                    }
+                }
+            }
+            let Some((w, s)) = stage1_choice(&candidates, t.error_tolerance) else {
+                anyhow::bail!("an empty stage-1 grid");
+            };
+            *q.settings.get_mut(a) = w;
+            line(&mut out, format!("stage 1 choice {name}: {w:?}"), &s);
+            // Stage 2a: NMS radius, p_d and clutter rate by the approach's mean MOTA.
+            let mut best: Option<(ApproachSettings, TuneScore)> = None;
+            for &nms in &t.suppression_radius_m {
+                for &pd in &t.p_detect {
+                    for &clutter in &t.clutter_per_scan {
+                        let w = ApproachSettings {
+                            suppression_radius_m: nms,
+                            p_detect: pd,
+                            clutter_per_scan: clutter,
+                            ..*q.settings.get(a)
+                        };
+                        let mut c = q.clone();
+                        *c.settings.get_mut(a) = w;
+                        let s = tune_score(&c, &sims, a)?;
+                        line(
+                            &mut out,
+                            format!("stage 2a {name}: nms {nms} m, p_d {pd}, clutter {clutter}"),
+                            &s,
+                        );
+                        if best.as_ref().is_none_or(|b| s.mota > b.1.mota) {
+                            best = Some((w, s));
+                        }
+                    }
+                }
+            }
+            let Some((w, s)) = best else {
+                anyhow::bail!("an empty stage-2a grid");
+            };
+            *q.settings.get_mut(a) = w;
+            line(&mut out, format!("stage 2a choice {name}: {w:?}"), &s);
+            // Stage 2b: the peaks' κ by the same MOTA.
+            let kappas = if *product {
+                &t.relative_threshold_product
+            } else {
+                &t.relative_threshold_sum
+            };
+            let mut best: Option<(ApproachSettings, TuneScore)> = None;
+            for &kappa in kappas {
+                let w = ApproachSettings {
+                    relative_threshold: kappa,
+                    ..*q.settings.get(a)
+                };
+                let mut c = q.clone();
+                *c.settings.get_mut(a) = w;
+                let s = tune_score(&c, &sims, a)?;
+                line(&mut out, format!("stage 2b {name}: kappa {kappa}"), &s);
+                if best.as_ref().is_none_or(|b| s.mota > b.1.mota) {
+                    best = Some((w, s));
+                }
+            }
+            let Some((w, s)) = best else {
+                anyhow::bail!("an empty stage-2b grid");
+            };
+            *q.settings.get_mut(a) = w;
+            line(&mut out, format!("round {round} choice {name}: {w:?}"), &s);
+            if w == before {
+                break;
+            }
+        }
+    }
+    // The choice as TOML, to paste into the scenario file.
+    for (a, (name, modalities, _)) in APPROACHES.iter().enumerate() {
+        let w = q.settings.get(a);
+        let mut fields = Vec::new();
+        if *modalities == Modalities::Both {
+            fields.push(format!("audio_weight = {:?}", w.audio_weight));
+            fields.push(format!("video_weight = {:?}", w.video_weight));
+        }
+        if *modalities != Modalities::Video {
+            fields.push(format!("audio_exponent = {:?}", w.audio_exponent));
+        }
+        if *modalities != Modalities::Audio {
+            fields.push(format!("video_exponent = {:?}", w.video_exponent));
+        }
+        if let Some(f) = w.product_floor {
+            fields.push(format!("product_floor = {f:?}"));
+        }
+        fields.push(format!("relative_threshold = {:?}", w.relative_threshold));
+        fields.push(format!(
+            "suppression_radius_m = {:?}",
+            w.suppression_radius_m
+        ));
+        fields.push(format!("p_detect = {:?}", w.p_detect));
+        fields.push(format!("clutter_per_scan = {:?}", w.clutter_per_scan));
+        let text = format!(
+            "{} = {{ {} }}",
+            key(name).replace("audiovideo", "audio_video"),
+            fields.join(", ")
+        );
+        eprintln!("{text}");
+        out.push_str(&text);
+        out.push('\n');
+    }
+    Ok(out)
+}
+
+/// Setting this environment variable runs [`MultiTuning`]'s search first and prints it.
+pub(super) const TUNE_MULTI_ENV: &str = "AV_FUSION_TUNE_MULTI";
+
+/// One coordinate of the multi-vehicle search: its name and how a candidate value sets it.
+pub(super) type Coordinate = (&'static str, Vec<f64>, fn(&mut ApproachSettings, f64));
+
+pub(super) fn lobes_with(
+    l: Option<LobeEqualisation>,
+    power: Option<f64>,
+    fraction: Option<f64>,
+) -> Option<LobeEqualisation> {
+    let base = l.unwrap_or(LobeEqualisation {
+        min_fraction: 0.3,
+        power: 0.0,
+    });
+    let next = LobeEqualisation {
+        min_fraction: fraction.unwrap_or(base.min_fraction),
+        power: power.unwrap_or(base.power),
+    };
+    (next.power > 0.0).then_some(next)
+}
+
+#[expect(
+    clippy::print_stderr,
+    reason = "the search takes minutes: each line goes to the terminal as it is measured"
+)]
+pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()> {
+    // Which approaches (indices into APPROACHES, comma-separated; anything else: all six).
+    let mut order: Vec<usize> = which
+        .split(',')
+        .filter_map(|s| s.trim().parse().ok())
+        .filter(|&a: &usize| a < APPROACHES.len())
+        .collect();
+    if order.is_empty() {
+        order = (0..APPROACHES.len()).collect();
+    }
+    let t = &p.multi_tuning;
+    let n_passes = p.passes.len();
+    let mut sims = Vec::new();
+    for &seed in &t.seeds {
+        let base = ChaCha8Rng::seed_from_u64(seed);
+        let batch: Vec<Simulated> = runs[n_passes..]
+            .par_iter()
+            .enumerate()
+            .map(|(i, run)| {
+                let mut rng = base.clone();
+                rng.set_stream((n_passes + i) as u64);
+                simulate_run(p, run, &mut rng)
+            })
+            .collect::<Result<_>>()?;
+        sims.extend(batch);
+    }
+    let objective = |a: usize, s: &ApproachSettings| -> Result<(f64, Vec<f64>)> {
+        let motas: Vec<f64> = sims
+            .par_iter()
+            .map(|sim| Ok(score_with(p, sim, nominal(p), a, s)?.mota))
+            .collect::<Result<_>>()?;
+        Ok((motas.iter().sum::<f64>() / motas.len().max(1) as f64, motas))
+    };
+    let mut chosen = Vec::new();
+    for a in order {
+        let (name, modalities, product) = &APPROACHES[a];
+        let mut coords: Vec<Coordinate> = Vec::new();
+        if *modalities != Modalities::Video {
+            coords.push(("audio lobe power", t.lobe_power.clone(), |s, v| {
+                s.audio_lobes = lobes_with(s.audio_lobes, Some(v), None);
+            }));
+            coords.push(("audio lobe fraction", t.lobe_fraction.clone(), |s, v| {
+                s.audio_lobes = lobes_with(s.audio_lobes, None, Some(v));
+            }));
+            coords.push(("audio exponent", t.audio_exponent.clone(), |s, v| {
+                s.audio_exponent = v
+            }));
+        }
+        if *modalities != Modalities::Audio {
+            coords.push(("video lobe power", t.lobe_power.clone(), |s, v| {
+                s.video_lobes = lobes_with(s.video_lobes, Some(v), None);
+            }));
+            coords.push(("video lobe fraction", t.lobe_fraction.clone(), |s, v| {
+                s.video_lobes = lobes_with(s.video_lobes, None, Some(v));
+            }));
+            coords.push(("video exponent", t.video_exponent.clone(), |s, v| {
+                s.video_exponent = v
+            }));
+        }
+        if *modalities == Modalities::Both {
+            coords.push(("video weight", t.video_weight.clone(), |s, v| {
+                s.video_weight = v
+            }));
+        }
+        coords.push((
+            "kappa",
+            if *product {
+                t.relative_threshold_product.clone()
+            } else {
+                t.relative_threshold_sum.clone()
+            },
+            |s, v| s.relative_threshold = v,
+        ));
+        coords.push(("nms", t.suppression_radius_m.clone(), |s, v| {
+            s.suppression_radius_m = v
+        }));
+        coords.push(("p_d", t.p_detect.clone(), |s, v| s.p_detect = v));
+        coords.push(("clutter", t.clutter_per_scan.clone(), |s, v| {
+            s.clutter_per_scan = v
+        }));
+        if *product {
+            coords.push(("floor", t.product_floor.clone(), |s, v| {
+                s.product_floor = Some(v);
+            }));
+        }
+        coords.push((
+            "max peaks",
+            t.max_peaks.iter().map(|&n| n as f64).collect(),
+            |s, v| s.max_peaks = Some(v as usize),
+        ));
+        coords.push(("births", t.births_per_scan.clone(), |s, v| {
+            s.births_per_scan = Some(v)
+        }));
+        coords.insert(
+            0,
+            ("explain away", t.explain_away_deg.clone(), |s, v| {
+                s.explain_away_deg = v
+            }),
+        );
+        let mut best = *p.multi_settings.get(a);
+        let (mut best_score, motas) = objective(a, &best)?;
+        eprintln!("multi {name}: as configured: MOTA {best_score:.3} {motas:.2?}");
+        for round in 1..=t.max_rounds.max(1) {
+            let before = best;
+            for (what, values, set) in &coords {
+                for &v in values {
+                    let mut c = best;
+                    set(&mut c, v);
+                    if c == best {
+                        continue;
+                    }
+                    let (m, motas) = objective(a, &c)?;
+                    eprintln!("multi {name} round {round}: {what} {v}: MOTA {m:.3} {motas:.2?}");
+                    if m > best_score {
+                        best = c;
+                        best_score = m;
+                    }
+                }
+            }
+            eprintln!("multi {name} round {round} choice: MOTA {best_score:.3} {best:?}");
+            if best == before {
+                break;
+            }
+        }
+        chosen.push((
+            key(name).replace("audiovideo", "audio_video"),
+            best,
+            best_score,
+        ));
+    }
+    for (k, s, m) in chosen {
+        eprintln!("{k} (MOTA {m:.3}) = {s:?}");
+    }
+    Ok(())
+}
+
+/// `AV_FUSION_DIAG=1,2,3`: where the multi-vehicle runs' MOTA errors come from.
+pub(super) const DIAG_ENV: &str = "AV_FUSION_DIAG";
+
+#[expect(clippy::print_stderr, reason = "developer diagnostics")]
+pub(super) fn diagnose(p: &Params, runs: &[RunSpec], seeds: &str) -> Result<()> {
+    let n_passes = p.passes.len();
+    for seed in seeds
+        .split(',')
+        .filter_map(|s| s.trim().parse::<u64>().ok())
+    {
+        let base = ChaCha8Rng::seed_from_u64(seed);
+        let sims: Vec<Simulated> = runs[n_passes..]
+            .par_iter()
+            .enumerate()
+            .map(|(i, run)| {
+                let mut rng = base.clone();
+                rng.set_stream((n_passes + i) as u64);
+                simulate_run(p, run, &mut rng)
+            })
+            .collect::<Result<_>>()?;
+        for (r, sim) in sims.iter().enumerate() {
+            for a in [0usize, 2, 3, 5] {
+                let s = score(p, sim, nominal(p), a)?;
+                let c = &s.clear;
+                let mut per_vehicle = Vec::new();
+                for g in sim.gt.tracks() {
+                    let (mut n, mut near) = (0, 0);
+                    for q in g.points() {
+                        n += 1;
+                        if let Some(scan) = s.result.scans.get(q.frame as usize)
+                            && scan
+                                .peaks
+                                .iter()
+                                .any(|m| (m.position - q.location.position()).norm() <= 2.0)
+                        {
+                            near += 1;
+                        }
+                    }
+                    per_vehicle.push(format!("{near}/{n}"));
+                }
+                let (_, _, false_peaks, ticks) = peak_counts(sim, &s.result);
+                eprintln!(
+                    "seed {seed} run {r} {}: MOTA {:.3} OSPA {:.2} | TP {} FN {} FP {} IDSW {} frag {} | tracks {} | peaks near vehicle {} | false peaks {}/{} ticks",
+                    APPROACHES[a].0,
+                    c.mota,
+                    s.ospa,
+                    c.true_positives,
+                    c.false_negatives,
+                    c.false_positives,
+                    c.id_switches,
+                    c.fragmentations,
+                    s.result.tracks.len(),
+                    per_vehicle.join(" "),
+                    false_peaks,
+                    ticks
+                );
+            }
+        }
+    }
+    Ok(())
+}
