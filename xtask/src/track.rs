@@ -62,7 +62,11 @@ pub fn run(req: &Request<'_>) -> Outcome {
     let settings = read_config(req.config)?;
     if req.print_config {
         let rows = req.input.map(read_input).transpose()?.unwrap_or_default();
-        print!("{}", render_config(&settings.resolve(&rows)?, req.tracker)?);
+        let effective = match req.tracker {
+            Some(tracker) => settings.resolve_for(&rows, tracker)?,
+            None => settings.resolve(&rows)?,
+        };
+        print!("{}", render_config(&effective, req.tracker)?);
         return Ok(true);
     }
     let (Some(tracker), Some(input), Some(out)) = (req.tracker, req.input, req.out) else {

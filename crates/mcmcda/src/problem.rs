@@ -58,10 +58,6 @@ pub struct Problem {
     backward: Vec<Vec<MeasId>>,
     /// Reused by [`Self::add_measurement`] (holds nothing between calls).
     scratch: Vec<MeasId>,
-    /// Size of the scan being pushed ([`Self::push_scan_scored`]; 1 for a measurement added
-    /// alone): a forward list is filled by one later scan, so its first entry reserves
-    /// room for that scan's measurements at once instead of growing push by push.
-    scan_size_hint: usize,
 }
 
 impl Problem {
@@ -83,7 +79,6 @@ impl Problem {
             forward: Vec::new(),
             backward: Vec::new(),
             scratch: Vec::new(),
-            scan_size_hint: 1,
         }
     }
 
@@ -157,8 +152,7 @@ impl Problem {
             });
         }
         self.n_scans = (frame - self.first_frame) as usize + 1;
-        self.scan_size_hint = points.len().max(1);
-        let ids: Result<Vec<MeasId>> = points
+        points
             .iter()
             .enumerate()
             .map(|(i, p)| {
@@ -167,9 +161,7 @@ impl Problem {
                 self.log_score_ratios[slot] = ratio(i);
                 Ok(id)
             })
-            .collect();
-        self.scan_size_hint = 1;
-        ids
+            .collect()
     }
 
     /// Adds one measurement to the existing scan at `frame` (a late measurement joins its own
@@ -231,11 +223,10 @@ impl Problem {
             self.backward[slot * d_bar + d - 1].extend_from_slice(&found);
             for &other in &found {
                 let other = self.slot(other);
-                let list = &mut self.forward[other * d_bar + d - 1];
-                if list.capacity() == 0 {
-                    list.reserve_exact(self.scan_size_hint);
-                }
-                list.push(id);
+                // Plain growth: a list holds the one to three neighbours a gate lets
+                // through, so reserving for the whole scan would cost memory quadratic in
+                // the scan size.
+                self.forward[other * d_bar + d - 1].push(id);
             }
         }
         self.scratch = found;

@@ -30,7 +30,7 @@ use rand_chacha::ChaCha8Rng;
 use sensors_video::PixelFormat;
 use tracker_model::{BoundingBox, Frame, MotRow, TrackSet};
 
-use crate::track::{EffectiveConfig, TrackConfig};
+use crate::track::{EffectiveConfig, TrackConfig, Tracker};
 
 /// p_D of the fused filter: with local detectors feeding it, a followed target is observed in
 /// nearly every frame, so the filter's p_D is that of the fused observations, not the global
@@ -362,7 +362,13 @@ pub fn track_frames(
     fused: &FusedSettings,
     seed: u64,
 ) -> Result<TrackSet> {
-    track_frames_resolved(dir, rows, &settings.resolve(rows)?, fused, seed)
+    track_frames_resolved(
+        dir,
+        rows,
+        &settings.resolve_for(rows, Tracker::Phd)?,
+        fused,
+        seed,
+    )
 }
 
 /// [`track_frames`] with the configuration already resolved against `rows`.

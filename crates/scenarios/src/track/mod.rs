@@ -337,6 +337,18 @@ impl TrackConfig {
     /// their boxes; with no rows, the defaults of the papers are the base). A table for a
     /// tracker that does not run is checked too: a mistake in it is a mistake in the file.
     pub fn resolve(&self, rows: &[MotRow]) -> Result<EffectiveConfig> {
+        self.resolve_scores(rows, true)
+    }
+
+    /// [`TrackConfig::resolve`] for one tracker: the detection-score densities (a GNN pass of
+    /// their own) are fitted only for the trackers whose likelihood has a score term, so not
+    /// for the PHD (its `score_model` stays `None`, as `--print-config` shows no `[scores]`
+    /// table for it).
+    pub fn resolve_for(&self, rows: &[MotRow], tracker: Tracker) -> Result<EffectiveConfig> {
+        self.resolve_scores(rows, tracker != Tracker::Phd)
+    }
+
+    fn resolve_scores(&self, rows: &[MotRow], with_scores: bool) -> Result<EffectiveConfig> {
         let boxes = boxes(rows);
         let (model_base, mut phd_base) = if boxes.is_empty() {
             (McmcdaConfig::default(), PhdConfig::default())
@@ -435,7 +447,11 @@ impl TrackConfig {
             // or the user's `[model] max_gap`).
             gnn.max_gap = Some(((f64::from(model.max_gap) / GAP_BOX_WIDTHS).round() as u32).max(1));
         }
-        let score_model = fit_scores(&model, rows, &self.fit, &gnn, &self.scores)?;
+        let score_model = if with_scores {
+            fit_scores(&model, rows, &self.fit, &gnn, &self.scores)?
+        } else {
+            None
+        };
         Ok(EffectiveConfig {
             model,
             fit: self.fit,
@@ -462,7 +478,7 @@ pub fn track_detections(
     if rows.is_empty() {
         bail!("no detections");
     }
-    let config = settings.resolve(rows)?;
+    let config = settings.resolve_for(rows, tracker)?;
     match tracker {
         Tracker::Phd => track_boxes_phd(rows, &config, seed),
         Tracker::Mcmcda | Tracker::McmcdaOnline | Tracker::Gnn | Tracker::GnnOnline => {
@@ -488,7 +504,7 @@ pub fn track_detections_with_frames(
     if rows.is_empty() {
         bail!("no detections");
     }
-    let config = settings.resolve(rows)?;
+    let config = settings.resolve_for(rows, tracker)?;
     let tracks = match (frames, tracker) {
         (Some(dir), _) => crate::track_frames::track_frames_resolved(
             dir,

@@ -363,6 +363,18 @@ fn the_score_densities_are_fitted_from_tracks_and_clutter() {
         summary.contains("tracks 0.8") && summary.contains("clutter 0."),
         "{summary}"
     );
+    // Only the trackers with a score term fit it; the PHD's resolution skips it and otherwise
+    // equals the full one.
+    let for_gnn = TrackConfig::default()
+        .resolve_for(&rows, Tracker::Gnn)
+        .unwrap();
+    assert_eq!(for_gnn.score_model.as_ref(), Some(m));
+    let for_phd = TrackConfig::default()
+        .resolve_for(&rows, Tracker::Phd)
+        .unwrap();
+    assert!(for_phd.score_model.is_none());
+    assert_eq!(for_phd.phd, effective.phd);
+    assert_eq!(for_phd.model, effective.model);
     // Off by configuration, or a constant column: no score model.
     let off = config("[scores]\nenabled = false\n")
         .resolve(&rows)

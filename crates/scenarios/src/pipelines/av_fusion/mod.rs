@@ -819,23 +819,6 @@ impl Pipeline for AvFusion {
                         .iter()
                         .all(|&a| out.multi.iter().any(|(_, mota, _)| mota[a] < 0.8)),
             ),
-            Claim::new(
-                "the multi-vehicle settings (lobe equalisation, own κ, exponents and MCMCDA \
-                 rates, tuned on seeds 1–3) raise audio+video's mean MOTA over the \
-                 multi-vehicle runs above its single-vehicle settings' under both rules",
-                !out.multi.is_empty()
-                    && [2usize, 5].iter().all(|&a| {
-                        let n = out.multi.len() as f64;
-                        let with: f64 = out.multi.iter().map(|(_, m, _)| m[a]).sum::<f64>() / n;
-                        let without: Option<f64> = out
-                            .multi_single_settings
-                            .iter()
-                            .map(|r| r[a])
-                            .sum::<Option<f64>>()
-                            .map(|x| x / n);
-                        without.is_some_and(|w| with > w)
-                    }),
-            ),
         ];
         if let (Some(first), Some(last)) = (out.sweep.first(), out.sweep.last())
             && out.sweep.len() >= 2
