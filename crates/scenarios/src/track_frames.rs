@@ -339,6 +339,10 @@ pub struct FusedSettings {
     pub detector: DetectorConfig,
     /// p_D of the fused filter.
     pub p_detect: f64,
+    /// The fused filter's extraction threshold: the paper's 0.5 (`PhdConfig::default()`), which
+    /// this path was built and tested with. The 0.3 of `--tracker phd` was tuned for the
+    /// filter on global detections alone, whose p_D is lower.
+    pub extraction_threshold: f64,
 }
 
 impl Default for FusedSettings {
@@ -347,12 +351,13 @@ impl Default for FusedSettings {
             fusion: FusionConfig::default(),
             detector: DetectorConfig::default(),
             p_detect: FUSED_P_DETECT,
+            extraction_threshold: phd_filter::PhdConfig::default().extraction_threshold,
         }
     }
 }
 
 /// Tracks `rows` with SMC-PHD (the `[phd]` table of `settings`, scaled and fitted to the boxes
-/// as `--tracker phd` does, p_D replaced by the fused one) fused with image local detectors on
+/// as `--tracker phd` does, p_D and the extraction threshold replaced by the fused ones) fused with image local detectors on
 /// the frames of `dir`. Track ids are the filter's labels. The filter draws from `seed`, the
 /// local detectors from a seed drawn from it.
 pub fn track_frames(
@@ -386,6 +391,7 @@ pub(crate) fn track_frames_resolved(
     folder.check_detections(rows)?;
     let filter = phd_filter::PhdConfig {
         p_detect: fused.p_detect,
+        extraction_threshold: fused.extraction_threshold,
         ..config.phd
     };
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -671,8 +677,10 @@ mod tests {
         // detections alone loses the sprite there (independent route: the same filter settings,
         // no local detectors).
         let config = TrackConfig::default().resolve(&rows).unwrap();
+        let fused = FusedSettings::default();
         let filter = phd_filter::PhdConfig {
-            p_detect: FUSED_P_DETECT,
+            p_detect: fused.p_detect,
+            extraction_threshold: fused.extraction_threshold,
             ..config.phd
         };
         let mut alone = PhdTracker::global_only(SmcPhd::new(filter, 3).unwrap());
