@@ -232,16 +232,7 @@ impl<'a> Partition<'a> {
             }
             None => 0,
         };
-        self.model
-            .filter_track(self.problem, &meas, &mut nodes, keep);
-        let weight = nodes.last().map_or(0.0, |last| {
-            self.model.track_weight(self.problem, &meas, last, self.hi)
-        });
-        self.reinsert(TrackState {
-            meas,
-            nodes,
-            weight,
-        });
+        self.insert_into(meas, nodes, keep);
     }
 
     /// Adds a track (assumed feasible) whose first `keep` nodes are already in `nodes` (the

@@ -449,20 +449,9 @@ pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()
         order = (0..APPROACHES.len()).collect();
     }
     let t = &p.multi_tuning;
-    let n_passes = p.passes.len();
     let mut sims = Vec::new();
     for &seed in &t.seeds {
-        let base = ChaCha8Rng::seed_from_u64(seed);
-        let batch: Vec<Simulated> = runs[n_passes..]
-            .par_iter()
-            .enumerate()
-            .map(|(i, run)| {
-                let mut rng = base.clone();
-                rng.set_stream((n_passes + i) as u64);
-                simulate_run(p, run, &mut rng)
-            })
-            .collect::<Result<_>>()?;
-        sims.extend(batch);
+        sims.extend(simulate_multi(p, runs, seed)?);
     }
     let objective = |a: usize, s: &ApproachSettings| -> Result<(f64, Vec<f64>)> {
         let motas: Vec<f64> = sims
@@ -579,21 +568,11 @@ pub(super) const DIAG_ENV: &str = "AV_FUSION_DIAG";
 
 #[expect(clippy::print_stderr, reason = "developer diagnostics")]
 pub(super) fn diagnose(p: &Params, runs: &[RunSpec], seeds: &str) -> Result<()> {
-    let n_passes = p.passes.len();
     for seed in seeds
         .split(',')
         .filter_map(|s| s.trim().parse::<u64>().ok())
     {
-        let base = ChaCha8Rng::seed_from_u64(seed);
-        let sims: Vec<Simulated> = runs[n_passes..]
-            .par_iter()
-            .enumerate()
-            .map(|(i, run)| {
-                let mut rng = base.clone();
-                rng.set_stream((n_passes + i) as u64);
-                simulate_run(p, run, &mut rng)
-            })
-            .collect::<Result<_>>()?;
+        let sims = simulate_multi(p, runs, seed)?;
         for (r, sim) in sims.iter().enumerate() {
             for a in [0usize, 2, 3, 5] {
                 let s = score(p, sim, nominal(p), a)?;
@@ -634,4 +613,20 @@ pub(super) fn diagnose(p: &Params, runs: &[RunSpec], seeds: &str) -> Result<()> 
         }
     }
     Ok(())
+}
+
+/// The multi-vehicle runs (`runs` after the single-vehicle passes) simulated from `seed`, run i
+/// on stream `n_passes + i` as the scenario itself draws them.
+fn simulate_multi(p: &Params, runs: &[RunSpec], seed: u64) -> Result<Vec<Simulated>> {
+    let n_passes = p.passes.len();
+    let base = ChaCha8Rng::seed_from_u64(seed);
+    runs[n_passes..]
+        .par_iter()
+        .enumerate()
+        .map(|(i, run)| {
+            let mut rng = base.clone();
+            rng.set_stream((n_passes + i) as u64);
+            simulate_run(p, run, &mut rng)
+        })
+        .collect()
 }
