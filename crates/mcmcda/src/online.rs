@@ -39,6 +39,20 @@ pub struct OnlineConfig {
     /// A track is reported at the current scan if its last measurement is at most this many
     /// scans old (targets are missed with probability 1 − p_d).
     pub coast_scans: usize,
+    /// Adaptive budget: a window's chain stops once this many consecutive samples have not
+    /// raised the window's MAP (the best log posterior seen, Algorithm 4's output), and after
+    /// `samples_per_scan` samples at most. The chain starts from the previous MAP extended
+    /// into the new scan, so in quiet stretches it starts at or near the answer. 0 (the
+    /// default) runs every window's full `samples_per_scan`, as Algorithm 4 does. A
+    /// heuristic: on the walkers' tuning sequences every value tried (50-1200) lost MOTA
+    /// (docs/mot-realistic.md).
+    pub patience: u64,
+    /// Draw no sample at a scan whose new measurements are all unambiguous given the start
+    /// (each taken by the greedy extension of the only live track whose gate holds it, that
+    /// track's only gated candidate, and no late measurement added since the last scan); the
+    /// start is then kept as the window's MAP. A heuristic: the older scans of such a window
+    /// are not revisited. `false` (the default) samples every window.
+    pub skip_unambiguous: bool,
 }
 
 impl Default for OnlineConfig {
@@ -48,6 +62,8 @@ impl Default for OnlineConfig {
             samples_per_scan: 2000,
             extension_gate: GATE_CHI2_2D,
             coast_scans: 2,
+            patience: 0,
+            skip_unambiguous: false,
         }
     }
 }
@@ -123,6 +139,10 @@ pub struct OnlineTracker {
     released: BTreeMap<u64, usize>,
     /// The first scan not committed yet.
     open_from: usize,
+    /// MCMC samples drawn by the windows so far.
+    samples_run: u64,
+    /// A late measurement was added since the last window (the next window is ambiguous).
+    late_pending: bool,
 }
 
 impl OnlineTracker {
@@ -140,6 +160,8 @@ impl OnlineTracker {
             committed: BTreeMap::new(),
             released: BTreeMap::new(),
             open_from: 0,
+            samples_run: 0,
+            late_pending: false,
         })
     }
 
@@ -163,7 +185,9 @@ impl OnlineTracker {
                 window_start: lo,
             });
         }
-        self.problem.add_measurement(frame, position)
+        let id = self.problem.add_measurement(frame, position)?;
+        self.late_pending = true;
+        Ok(id)
     }
 
     /// Processes the scan at `frame` (after any empty scans needed to reach it).
@@ -208,9 +232,12 @@ impl OnlineTracker {
                 start.insert(kept, None);
             }
         }
-        extend_into_last_scan(&mut start, self.config.extension_gate);
+        let ambiguous = extend_into_last_scan(&mut start, self.config.extension_gate);
         let mut chain = Chain::new(start, &mut self.rng);
-        chain.run(self.config.samples_per_scan);
+        if ambiguous || self.late_pending || !self.config.skip_unambiguous {
+            self.samples_run += run_window(&mut chain, &self.config);
+        }
+        self.late_pending = false;
         let (best, log_posterior) = chain.map();
         let best = best.to_vec();
         drop(chain);
@@ -241,6 +268,13 @@ impl OnlineTracker {
             estimates,
             log_posterior,
         })
+    }
+
+    /// MCMC samples the windows have drawn so far (`samples_per_scan` per scan unless
+    /// [`OnlineConfig::patience`] stops windows early or [`OnlineConfig::skip_unambiguous`]
+    /// skips scans; [`Self::sample_joins`] is not counted).
+    pub fn samples_run(&self) -> u64 {
+        self.samples_run
     }
 
     /// The current window's MAP tracks with their persistent labels (measurement ids in scan
@@ -456,9 +490,38 @@ impl OnlineTracker {
     }
 }
 
+/// Runs a window's chain: `samples_per_scan` steps, or with [`OnlineConfig::patience`] > 0
+/// until that many consecutive steps leave the MAP unchanged (at most `samples_per_scan`).
+/// Returns the steps taken. With patience 0 this is exactly [`Chain::run`].
+fn run_window<R: rand::Rng>(chain: &mut Chain<'_, R>, config: &OnlineConfig) -> u64 {
+    let budget = config.samples_per_scan;
+    if config.patience == 0 {
+        chain.run(budget);
+        return budget;
+    }
+    let mut best = chain.map().1;
+    let mut stale = 0;
+    for n in 1..=budget {
+        chain.step();
+        let log_posterior = chain.map().1;
+        if log_posterior > best {
+            best = log_posterior;
+            stale = 0;
+        } else {
+            stale += 1;
+            if stale >= config.patience {
+                return n;
+            }
+        }
+    }
+    budget
+}
+
 /// Greedily extends every track that can still grow into the last scan of the window, by
-/// increasing innovation cost, gated.
-fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64) {
+/// increasing innovation cost, gated. Returns whether the last scan is ambiguous: one of its
+/// measurements is left free, or lies in the gate of two tracks, or a track has two gated
+/// candidates.
+fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64) -> bool {
     let (model, problem, hi) = (partition.model, partition.problem, partition.hi);
     let mut pairs: Vec<(f64, usize, MeasId)> = Vec::new();
     for (k, t) in partition.tracks.iter().enumerate() {
@@ -476,6 +539,21 @@ fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64) {
             if maha <= gate {
                 pairs.push((node.cum_log_likelihood() - next.cum_log_likelihood(), k, m));
             }
+        }
+    }
+    let mut ambiguous = false;
+    {
+        let mut per_track: BTreeMap<usize, usize> = BTreeMap::new();
+        let mut per_meas: BTreeMap<MeasId, usize> = BTreeMap::new();
+        for &(_, k, m) in &pairs {
+            *per_track.entry(k).or_default() += 1;
+            *per_meas.entry(m).or_default() += 1;
+        }
+        if per_track.values().chain(per_meas.values()).any(|&n| n > 1) {
+            ambiguous = true;
+        }
+        if problem.scan(hi).iter().any(|m| !per_meas.contains_key(m)) {
+            ambiguous = true;
         }
     }
     pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -497,6 +575,7 @@ fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64) {
         let keep = old.meas.len();
         partition.insert(meas, Some((&old.nodes, keep)));
     }
+    ambiguous
 }
 
 /// Labels the new MAP's tracks: each takes the label of the previous track it shares the most

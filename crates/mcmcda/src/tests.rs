@@ -1846,3 +1846,116 @@ fn single_track_q_stops_early_with_the_full_sums_bits() {
     assert!(finite > 40, "{finite} finite comparisons");
     assert!(stops > 20, "the sums stopped early only {stops} times");
 }
+
+/// Runs the online tracker over `scans` (plus `extra` points at some frames) and returns the
+/// final associations as sorted position lists, with the samples drawn.
+fn online_run(
+    scans: &[Scan],
+    extra: &[(u32, Vector2<f64>)],
+    config: crate::OnlineConfig,
+) -> (Vec<Vec<(f64, f64)>>, u64) {
+    let model = McmcdaConfig::default().check().unwrap();
+    let mut tracker = crate::OnlineTracker::new(model, 0, config, 3).unwrap();
+    for s in scans {
+        let mut points: Vec<Vector2<f64>> = s.measurements.iter().map(|m| m.value).collect();
+        points.extend(extra.iter().filter(|(f, _)| *f == s.frame).map(|(_, p)| *p));
+        tracker.push_scan(s.frame, &points).unwrap();
+    }
+    let samples = tracker.samples_run();
+    let result = tracker.finish().unwrap();
+    let mut tracks: Vec<Vec<(f64, f64)>> = result
+        .associations
+        .iter()
+        .map(|(_, t)| {
+            t.iter()
+                .map(|&m| {
+                    let p = result.problem.position(m);
+                    (p.x, p.y)
+                })
+                .collect()
+        })
+        .collect();
+    tracks.sort_by(|a, b| a[0].0.total_cmp(&b[0].0));
+    (tracks, samples)
+}
+
+#[test]
+fn online_patience_stops_early_with_the_full_budgets_map_and_the_cap_binds() {
+    use crate::OnlineConfig;
+    // Three separated walkers, two misses: after the first scans every window's start (the
+    // previous MAP extended into the new scan) already is the MAP.
+    let scans = three_walkers(30, &[(10, 0), (20, 1)]);
+    let full = OnlineConfig {
+        window: 6,
+        samples_per_scan: 500,
+        ..OnlineConfig::default()
+    };
+    let (tracks, samples) = online_run(&scans, &[], full);
+    // The default draws every window's whole budget.
+    assert_eq!(samples, 30 * 500);
+    // Sorted by starting x: walkers 0 and 1 miss one scan each, walker 2 none.
+    assert_eq!(
+        tracks.iter().map(Vec::len).collect::<Vec<_>>(),
+        vec![29, 29, 30]
+    );
+    let patient = OnlineConfig {
+        patience: 50,
+        ..full
+    };
+    let (early, early_samples) = online_run(&scans, &[], patient);
+    assert_eq!(early, tracks, "the adaptive stop changed the MAP");
+    // At least 50 samples per window, far fewer than the budget in all.
+    assert!(early_samples >= 30 * 50, "{early_samples}");
+    assert!(early_samples < 30 * 500 / 3, "{early_samples} samples");
+    // A patience beyond the budget never stops a chain: the cap binds, and the draws are
+    // those of the fixed budget.
+    let capped = OnlineConfig {
+        patience: 501,
+        ..full
+    };
+    assert_eq!(online_run(&scans, &[], capped), (tracks, 30 * 500));
+}
+
+#[test]
+fn online_skip_unambiguous_samples_only_the_ambiguous_scans() {
+    use crate::OnlineConfig;
+    let scans = three_walkers(30, &[(10, 0), (20, 1)]);
+    let full = OnlineConfig {
+        window: 6,
+        samples_per_scan: 500,
+        ..OnlineConfig::default()
+    };
+    let skip = OnlineConfig {
+        skip_unambiguous: true,
+        ..full
+    };
+    let (tracks, _) = online_run(&scans, &[], full);
+    // Scans 0 and 1 hold free measurements (no track has two measurements yet); from scan 2
+    // on every measurement extends the one track whose gate holds it (the misses leave a
+    // track unextended, which is not ambiguous).
+    let (skipped, samples) = online_run(&scans, &[], skip);
+    assert_eq!(skipped, tracks);
+    assert_eq!(samples, 2 * 500);
+    // A false point far from every walker at frame 15 is free: that scan is sampled too, and
+    // the point joins no track.
+    let clutter = [(15, Vector2::new(3000.0, 3000.0))];
+    let (with_clutter, samples) = online_run(&scans, &clutter, skip);
+    assert_eq!(with_clutter, tracks);
+    assert_eq!(samples, 3 * 500);
+    // Walker 1's missed measurement of frame 20 arriving late, after frame 21: the window of
+    // frame 22 is sampled for it, and the chain puts it on walker 1's track.
+    let model = McmcdaConfig::default().check().unwrap();
+    let mut tracker = crate::OnlineTracker::new(model, 0, skip, 3).unwrap();
+    for s in &scans {
+        let points: Vec<Vector2<f64>> = s.measurements.iter().map(|m| m.value).collect();
+        tracker.push_scan(s.frame, &points).unwrap();
+        if s.frame == 21 {
+            tracker.add_late(20, Vector2::new(900.0, 600.0)).unwrap();
+        }
+    }
+    assert_eq!(tracker.samples_run(), 3 * 500);
+    let result = tracker.finish().unwrap();
+    let mut lengths: Vec<usize> = result.associations.iter().map(|(_, t)| t.len()).collect();
+    lengths.sort_unstable();
+    assert_eq!(lengths, vec![29, 30, 30]);
+}

@@ -660,6 +660,14 @@ const KEY_COMMENTS: [(&str, &[(&str, &str)]); 9] = [
                 "coast_scans",
                 "a track is reported while its last detection is at most this many frames old",
             ),
+            (
+                "patience",
+                "stop a window's chain after this many samples without a better MAP (0 = run all samples_per_scan)",
+            ),
+            (
+                "skip_unambiguous",
+                "draw no sample at a frame whose every detection extends the only track gating it",
+            ),
         ],
     ),
     (
