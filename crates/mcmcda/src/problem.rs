@@ -196,28 +196,40 @@ impl Problem {
         let d_bar = self.max_gap;
         self.forward.extend((0..d_bar).map(|_| Vec::new()));
         self.backward.extend((0..d_bar).map(|_| Vec::new()));
-        // One reused buffer for the neighbours found at each gap (no allocation per gap).
+        // One reused buffer for the neighbours found at each gap (no allocation per gap). Only
+        // the held (non-empty) scans within d̄ of `scan` are visited, found by two binary
+        // searches, instead of looking up each of the 2 d̄ scan indices: the lists are the
+        // same, since each gap's list is filled from one scan only.
         let mut found = std::mem::take(&mut self.scratch);
-        for d in 1..=d_bar {
+        let later = self.held.partition_point(|&s| (s as usize) <= scan)
+            ..self.held.partition_point(|&s| (s as usize) <= scan + d_bar);
+        for i in later {
+            let d = self.held[i] as usize - scan;
             found.clear();
             found.extend(
-                self.scan(scan + d)
+                self.members[i]
                     .iter()
                     .copied()
-                    .filter(|&other| self.within(id, other, d)),
+                    .filter(|&other| self.within_of(position, other, d)),
             );
             self.forward[slot * d_bar + d - 1].extend_from_slice(&found);
             for &other in &found {
                 let other = self.slot(other);
                 self.backward[other * d_bar + d - 1].push(id);
             }
+        }
+        let earlier = self
+            .held
+            .partition_point(|&s| (s as usize) < scan.saturating_sub(d_bar))
+            ..self.held.partition_point(|&s| (s as usize) < scan);
+        for i in earlier {
+            let d = scan - self.held[i] as usize;
             found.clear();
             found.extend(
-                scan.checked_sub(d)
-                    .map_or(&[][..], |s| self.scan(s))
+                self.members[i]
                     .iter()
                     .copied()
-                    .filter(|&other| self.within(id, other, d)),
+                    .filter(|&other| self.within_of(position, other, d)),
             );
             // The new measurement's own lists are filled in one go, not push by push.
             self.backward[slot * d_bar + d - 1].extend_from_slice(&found);
@@ -383,8 +395,13 @@ impl Problem {
 
     /// Whether `a` and `b` can be consecutive measurements of one track `d` scans apart.
     pub fn within(&self, a: MeasId, b: MeasId, d: usize) -> bool {
+        self.within_of(self.position(a), b, d)
+    }
+
+    /// [`Self::within`] for a measurement at `position`.
+    fn within_of(&self, position: Vec2, b: MeasId, d: usize) -> bool {
         let r = d as f64 * self.radius_per_scan;
-        (self.position(a) - self.position(b)).norm_squared() <= r * r
+        (position - self.position(b)).norm_squared() <= r * r
     }
 
     /// Frame of scan index 0.

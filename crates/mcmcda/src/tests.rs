@@ -1959,3 +1959,67 @@ fn online_skip_unambiguous_samples_only_the_ambiguous_scans() {
     lengths.sort_unstable();
     assert_eq!(lengths, vec![29, 30, 30]);
 }
+
+/// Every neighbour list against brute force: `forward(m, d)` holds exactly the measurements of
+/// scan s(m) + d within reach of m, and `backward(m, d)` those of scan s(m) − d, in id order,
+/// on a problem with empty scans (skipped frame numbers), late measurements and gaps of up to
+/// d̄ = 4.
+#[test]
+fn neighbour_lists_equal_brute_force() {
+    let model = McmcdaConfig {
+        max_gap: 4,
+        max_speed: 3.0,
+        ..McmcdaConfig::default()
+    }
+    .check()
+    .unwrap();
+    let mut problem = Problem::empty(&model, 1);
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let mut uniform = |scale: f64| scale * rand::RngExt::random::<f64>(&mut rng);
+    for frame in [1u32, 2, 3, 5, 6, 9, 10, 11, 12, 15] {
+        let n = 1 + (uniform(4.0) as usize);
+        let points: Vec<Vector2<f64>> = (0..n)
+            .map(|_| Vector2::new(uniform(20.0), uniform(20.0)))
+            .collect();
+        problem.push_scan(frame, &points).unwrap();
+        if frame >= 5 {
+            // Late measurements two and four frames back (existing scans or empty ones), so
+            // that later scans at every gap up to d̄ already hold measurements.
+            for back in [2, 4] {
+                let late = Vector2::new(uniform(20.0), uniform(20.0));
+                problem.add_measurement(frame - back, late).unwrap();
+            }
+        }
+    }
+    let all: Vec<u32> = (0..problem.n_measurements() as u32).collect();
+    let mut non_empty = 0;
+    for &m in &all {
+        for d in 1..=4 {
+            let reach = d as f64 * model.radius_per_scan;
+            let within = |o: u32| {
+                (problem.position(m) - problem.position(o)).norm_squared() <= reach * reach
+            };
+            let later: Vec<u32> = all
+                .iter()
+                .copied()
+                .filter(|&o| problem.scan_of(o) == problem.scan_of(m) + d && within(o))
+                .collect();
+            let earlier: Vec<u32> = all
+                .iter()
+                .copied()
+                .filter(|&o| problem.scan_of(o) + d == problem.scan_of(m) && within(o))
+                .collect();
+            let mut forward = problem.forward(m, d).to_vec();
+            let mut backward = problem.backward(m, d).to_vec();
+            forward.sort_unstable();
+            backward.sort_unstable();
+            assert_eq!(forward, later, "forward({m}, {d})");
+            assert_eq!(backward, earlier, "backward({m}, {d})");
+            non_empty += usize::from(!later.is_empty());
+        }
+    }
+    assert!(
+        non_empty > 20,
+        "the case must exercise the lists: {non_empty}"
+    );
+}
