@@ -232,9 +232,10 @@ impl OnlineTracker {
                 start.insert(kept, None);
             }
         }
-        let ambiguous = extend_into_last_scan(&mut start, self.config.extension_gate);
+        let skip = self.config.skip_unambiguous;
+        let ambiguous = extend_into_last_scan(&mut start, self.config.extension_gate, skip);
         let mut chain = Chain::new(start, &mut self.rng);
-        if ambiguous || self.late_pending || !self.config.skip_unambiguous {
+        if !skip || ambiguous || self.late_pending {
             self.samples_run += run_window(&mut chain, &self.config);
         }
         self.late_pending = false;
@@ -518,10 +519,10 @@ fn run_window<R: rand::Rng>(chain: &mut Chain<'_, R>, config: &OnlineConfig) -> 
 }
 
 /// Greedily extends every track that can still grow into the last scan of the window, by
-/// increasing innovation cost, gated. Returns whether the last scan is ambiguous: one of its
-/// measurements is left free, or lies in the gate of two tracks, or a track has two gated
-/// candidates.
-fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64) -> bool {
+/// increasing innovation cost, gated. With `check_ambiguity`, returns whether the last scan is
+/// ambiguous: one of its measurements is left free, or lies in the gate of two tracks, or a
+/// track has two gated candidates (otherwise `true`, unchecked).
+fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64, check_ambiguity: bool) -> bool {
     let (model, problem, hi) = (partition.model, partition.problem, partition.hi);
     let mut pairs: Vec<(f64, usize, MeasId)> = Vec::new();
     for (k, t) in partition.tracks.iter().enumerate() {
@@ -541,8 +542,8 @@ fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64) -> bool {
             }
         }
     }
-    let mut ambiguous = false;
-    {
+    let mut ambiguous = !check_ambiguity;
+    if check_ambiguity {
         let mut per_track: BTreeMap<usize, usize> = BTreeMap::new();
         let mut per_meas: BTreeMap<MeasId, usize> = BTreeMap::new();
         for &(_, k, m) in &pairs {
