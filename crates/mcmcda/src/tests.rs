@@ -2009,12 +2009,10 @@ fn neighbour_lists_equal_brute_force() {
                 .copied()
                 .filter(|&o| problem.scan_of(o) + d == problem.scan_of(m) && within(o))
                 .collect();
-            let mut forward = problem.forward(m, d).to_vec();
-            let mut backward = problem.backward(m, d).to_vec();
-            forward.sort_unstable();
-            backward.sort_unstable();
-            assert_eq!(forward, later, "forward({m}, {d})");
-            assert_eq!(backward, earlier, "backward({m}, {d})");
+            // In id order, unsorted: proposals index into these lists, so their order is
+            // part of what a seed reproduces.
+            assert_eq!(problem.forward(m, d), later, "forward({m}, {d})");
+            assert_eq!(problem.backward(m, d), earlier, "backward({m}, {d})");
             non_empty += usize::from(!later.is_empty());
         }
     }

@@ -357,9 +357,9 @@ impl Default for FusedSettings {
 }
 
 /// Tracks `rows` with SMC-PHD (the `[phd]` table of `settings`, scaled and fitted to the boxes
-/// as `--tracker phd` does, p_D and the extraction threshold replaced by the fused ones) fused with image local detectors on
-/// the frames of `dir`. Track ids are the filter's labels. The filter draws from `seed`, the
-/// local detectors from a seed drawn from it.
+/// as `--tracker phd` does, then [`fused_config`]) fused with image local detectors on the
+/// frames of `dir`. Track ids are the filter's labels. The filter draws from `seed`, the local
+/// detectors from a seed drawn from it.
 pub fn track_frames(
     dir: &Path,
     rows: &[MotRow],
@@ -367,16 +367,27 @@ pub fn track_frames(
     fused: &FusedSettings,
     seed: u64,
 ) -> Result<TrackSet> {
-    track_frames_resolved(
-        dir,
-        rows,
-        &settings.resolve_for(rows, Tracker::Phd)?,
-        fused,
-        seed,
-    )
+    let config = fused_config(settings, rows, fused)?;
+    track_frames_resolved(dir, rows, &config, fused, seed)
 }
 
-/// [`track_frames`] with the configuration already resolved against `rows`.
+/// The configuration the fused tracker runs with: `settings` resolved for the PHD, with p_D
+/// replaced by the fused one and the extraction threshold by the fused default unless the
+/// `[phd]` table sets it.
+pub fn fused_config(
+    settings: &TrackConfig,
+    rows: &[MotRow],
+    fused: &FusedSettings,
+) -> Result<EffectiveConfig> {
+    let mut config = settings.resolve_for(rows, Tracker::Phd)?;
+    config.phd.p_detect = fused.p_detect;
+    if !settings.sets_phd_key("extraction_threshold") {
+        config.phd.extraction_threshold = fused.extraction_threshold;
+    }
+    Ok(config)
+}
+
+/// [`track_frames`] with the configuration of [`fused_config`].
 pub(crate) fn track_frames_resolved(
     dir: &Path,
     rows: &[MotRow],
@@ -389,11 +400,7 @@ pub(crate) fn track_frames_resolved(
         bail!("no detections");
     }
     folder.check_detections(rows)?;
-    let filter = phd_filter::PhdConfig {
-        p_detect: fused.p_detect,
-        extraction_threshold: fused.extraction_threshold,
-        ..config.phd
-    };
+    let filter = config.phd;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let detector_seed: u64 = rng.random();
     let feed = FrameFeed::new();
@@ -476,6 +483,25 @@ mod tests {
             0,
         ));
         assert!(matches!(err, FramesError::MissingDir { .. }), "{err}");
+    }
+
+    #[test]
+    #[expect(clippy::float_cmp, reason = "configuration values are copied, not computed")]
+    fn the_fused_config_keeps_a_set_extraction_threshold() {
+        let rows = [det(1, a_box()), det(2, a_box())];
+        let fused = FusedSettings::default();
+        let default = fused_config(&TrackConfig::default(), &rows, &fused).unwrap();
+        assert_eq!(default.phd.p_detect, fused.p_detect);
+        assert_eq!(default.phd.extraction_threshold, 0.5);
+        // `--tracker phd` alone uses the boxes' 0.3; the fused path its own 0.5 unless set.
+        let alone = TrackConfig::default()
+            .resolve_for(&rows, Tracker::Phd)
+            .unwrap();
+        assert_eq!(alone.phd.extraction_threshold, 0.3);
+        let set: TrackConfig = toml::from_str("[phd]\nextraction_threshold = 0.9\n").unwrap();
+        let user = fused_config(&set, &rows, &fused).unwrap();
+        assert_eq!(user.phd.extraction_threshold, 0.9);
+        assert_eq!(user.phd.p_detect, fused.p_detect);
     }
 
     #[test]
@@ -676,13 +702,9 @@ mod tests {
         // The frames without detections are where the pixels matter: SMC-PHD on the global
         // detections alone loses the sprite there (independent route: the same filter settings,
         // no local detectors).
-        let config = TrackConfig::default().resolve(&rows).unwrap();
-        let fused = FusedSettings::default();
-        let filter = phd_filter::PhdConfig {
-            p_detect: fused.p_detect,
-            extraction_threshold: fused.extraction_threshold,
-            ..config.phd
-        };
+        let filter = fused_config(&TrackConfig::default(), &rows, &FusedSettings::default())
+            .unwrap()
+            .phd;
         let mut alone = PhdTracker::global_only(SmcPhd::new(filter, 3).unwrap());
         let mut found_alone = 0;
         for f in 1..=n {

@@ -340,6 +340,11 @@ impl TrackConfig {
         self.resolve_scores(rows, true)
     }
 
+    /// Whether the configuration file sets `key` in its `[phd]` table.
+    pub(crate) fn sets_phd_key(&self, key: &str) -> bool {
+        self.phd.as_ref().is_some_and(|t| t.contains_key(key))
+    }
+
     /// [`TrackConfig::resolve`] for one tracker: the detection-score densities (a GNN pass of
     /// their own) are fitted only for the trackers whose likelihood has a score term, so not
     /// for the PHD (its `score_model` stays `None`, as `--print-config` shows no `[scores]`
@@ -504,15 +509,15 @@ pub fn track_detections_with_frames(
     if rows.is_empty() {
         bail!("no detections");
     }
-    let config = settings.resolve_for(rows, tracker)?;
+    let fused = crate::track_frames::FusedSettings::default();
+    let config = match frames {
+        Some(_) => crate::track_frames::fused_config(settings, rows, &fused)?,
+        None => settings.resolve_for(rows, tracker)?,
+    };
     let tracks = match (frames, tracker) {
-        (Some(dir), _) => crate::track_frames::track_frames_resolved(
-            dir,
-            rows,
-            &config,
-            &crate::track_frames::FusedSettings::default(),
-            seed,
-        )?,
+        (Some(dir), _) => {
+            crate::track_frames::track_frames_resolved(dir, rows, &config, &fused, seed)?
+        }
         (None, Tracker::Phd) => track_boxes_phd(rows, &config, seed)?,
         (None, _) => track_points(tracker, rows, &config, seed)?,
     };
