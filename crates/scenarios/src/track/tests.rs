@@ -63,15 +63,22 @@ fn error_of(text: &str, tracker: Tracker) -> String {
 #[test]
 fn printed_configs_load_back_unchanged() {
     for rows in [walkers(), Vec::new()] {
-        let effective = TrackConfig::default().resolve(&rows).unwrap();
         for tracker in [
             None,
             Some(Tracker::Mcmcda),
+            Some(Tracker::McmcdaOnline),
             Some(Tracker::Gnn),
+            Some(Tracker::GnnOnline),
             Some(Tracker::Phd),
         ] {
+            // As `--print-config` resolves: for the tracker named, or everything.
+            let resolve = |c: &TrackConfig| match tracker {
+                Some(t) => c.resolve_for(&rows, t).unwrap(),
+                None => c.resolve(&rows).unwrap(),
+            };
+            let effective = resolve(&TrackConfig::default());
             let text = render_config(&effective, tracker).unwrap();
-            let back = config(&text).resolve(&rows).unwrap();
+            let back = resolve(&config(&text));
             // What the printed tables hold comes back exactly; the tables left out are the
             // (identical) defaults.
             assert_eq!(back, effective, "{tracker:?}:\n{text}");
