@@ -1,9 +1,9 @@
-//! The plot backend: renders a pipeline's `scenarios::Chart` (labelled series drawn as lines
-//! or markers on one pair of axes) to SVG with plotters.
+//! The plot backend: renders a pipeline's `scenarios::Chart` (labelled series drawn as lines,
+//! markers or bars on one pair of axes) to SVG with plotters.
 
 use anyhow::{Result, anyhow};
 use plotters::prelude::*;
-use scenarios::{Chart, Series, Style, YAxis};
+use scenarios::{BAR_WIDTH, Chart, Series, Style, YAxis};
 
 /// Matplotlib's "tab10" colours: distinct on white and for most colour-blind readers.
 const PALETTE: [RGBColor; 8] = [
@@ -58,8 +58,26 @@ pub fn render(chart: &Chart) -> Result<String> {
         let to_err = |e: &dyn std::fmt::Display| anyhow!("plot {:?}: {e}", axes.title);
         root.fill(&WHITE).map_err(|e| to_err(&e))?;
         let (plot_area, legend_area) = root.split_horizontally(PLOT_W);
-        let (x0, x1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.0)));
-        let (y0, y1) = range(series.iter().flat_map(|s| s.points.iter().map(|p| p.1)));
+        // Bars stand on 0 and are BAR_WIDTH wide: the axes hold their feet and edges.
+        let bars = series.iter().filter(|s| s.style == Style::Bars);
+        let bar_x = bars.clone().flat_map(|s| {
+            s.points
+                .iter()
+                .flat_map(|p| [p.0 - BAR_WIDTH, p.0 + BAR_WIDTH])
+        });
+        let bar_feet = bars.flat_map(|s| s.points.first().map(|_| 0.0));
+        let (x0, x1) = range(
+            series
+                .iter()
+                .flat_map(|s| s.points.iter().map(|p| p.0))
+                .chain(bar_x),
+        );
+        let (y0, y1) = range(
+            series
+                .iter()
+                .flat_map(|s| s.points.iter().map(|p| p.1))
+                .chain(bar_feet),
+        );
         let y_range = match chart.y_axis {
             YAxis::Up => y0..y1,
             YAxis::Down => y1..y0,
@@ -90,6 +108,10 @@ pub fn render(chart: &Chart) -> Result<String> {
                 Style::Markers => {
                     plot.draw_series(s.points.iter().map(|&p| Circle::new(p, 2, colour.filled())))
                 }
+                Style::Bars => plot.draw_series(s.points.iter().map(|&(x, y)| {
+                    let half = BAR_WIDTH / 2.0;
+                    Rectangle::new([(x - half, 0.0), (x + half, y)], colour.filled())
+                })),
             }
             .map_err(|e| to_err(&e))?;
         }
@@ -98,6 +120,9 @@ pub fn render(chart: &Chart) -> Result<String> {
             let (colour, width) = look(s);
             match s.style {
                 Style::Markers => legend_area.draw(&Circle::new((19, y), 3, colour.filled())),
+                Style::Bars => {
+                    legend_area.draw(&Rectangle::new([(10, y - 6), (28, y + 6)], colour.filled()))
+                }
                 _ => legend_area.draw(&PathElement::new(
                     vec![(8, y), (30, y)],
                     colour.stroke_width(width),
@@ -125,6 +150,7 @@ fn look(s: &Series) -> (RGBAColor, u32) {
         Style::ThinLine => (colour.mix(0.6), 1),
         Style::Faint => (colour.mix(0.2), 1),
         Style::Markers => (colour.mix(0.7), 1),
+        Style::Bars => (colour.mix(0.85), 1),
     }
 }
 
@@ -166,5 +192,29 @@ mod tests {
             1,
             "unlabelled markers get no legend entry"
         );
+    }
+
+    #[test]
+    fn bars_stand_on_zero_with_one_rectangle_each_and_a_legend_swatch() {
+        let bars = |label: &str, points: Vec<(f64, f64)>, colour| {
+            Series::new(label, points, Style::Bars, colour)
+        };
+        let chart = Chart::new(
+            "errors",
+            "pass",
+            "error (m)",
+            vec![
+                bars("a", vec![(1.0, 2.0), (2.0, 3.0)], 0),
+                // Pass 1 of "b" formed no track: no bar there.
+                bars("b", vec![(2.0 + BAR_WIDTH, 4.0)], 1),
+            ],
+        );
+        let without = render(&Chart::new("empty", "pass", "error (m)", Vec::new())).unwrap();
+        let svg = render(&chart).unwrap();
+        // Three bars and two legend swatches more than the frame alone draws.
+        let rects = |s: &str| s.matches("<rect").count();
+        assert_eq!(rects(&svg) - rects(&without), 3 + 2, "{svg}");
+        // The y axis reaches down to the bars' foot, 0, though every value is ≥ 2.
+        assert!(svg.contains(">\n0\n<") || svg.contains(">0<"), "{svg}");
     }
 }

@@ -60,7 +60,7 @@ pub mod track;
 pub mod track_frames;
 pub mod walkers;
 
-pub use report::{Axes, Chart, Figure, Section, Series, Style, Table, YAxis, fmt_num};
+pub use report::{Axes, BAR_WIDTH, Chart, Figure, Section, Series, Style, Table, YAxis, fmt_num};
 
 /// Metric name → value, sorted so that expected files diff cleanly.
 pub type Metrics = BTreeMap<String, f64>;

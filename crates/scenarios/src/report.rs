@@ -127,7 +127,14 @@ pub enum Style {
     Faint,
     /// Small circles.
     Markers,
+    /// Filled bars from 0 to each point's y, [`BAR_WIDTH`] wide and centred on its x. Grouped
+    /// bars are series whose x values are offset by multiples of [`BAR_WIDTH`]; a point left
+    /// out is a missing bar.
+    Bars,
 }
+
+/// Width of a [`Style::Bars`] bar in x-axis units.
+pub const BAR_WIDTH: f64 = 0.25;
 
 /// One labelled series.
 #[derive(Debug, Clone)]

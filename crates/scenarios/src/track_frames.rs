@@ -486,7 +486,10 @@ mod tests {
     }
 
     #[test]
-    #[expect(clippy::float_cmp, reason = "configuration values are copied, not computed")]
+    #[expect(
+        clippy::float_cmp,
+        reason = "configuration values are copied, not computed"
+    )]
     fn the_fused_config_keeps_a_set_extraction_threshold() {
         let rows = [det(1, a_box()), det(2, a_box())];
         let fused = FusedSettings::default();

@@ -40,7 +40,8 @@ use tuning::*;
 
 use crate::stats::mean_ci;
 use crate::{
-    Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table, fmt_num,
+    BAR_WIDTH, Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style,
+    Table, fmt_num,
 };
 
 /// The `av-fusion` pipeline.
@@ -952,8 +953,8 @@ impl Pipeline for AvFusion {
                 cell(average(&out.sweep[s][5])),
             ]);
         }
-        // Bars as markers per pass index (the report's charts have no bar style); a missing
-        // marker is a pass with no track.
+        // Grouped bars per pass index, as the paper's Figs. 10-11; a missing bar is a pass
+        // with no track.
         let bar_chart = |rule_product: bool| {
             let offset = if rule_product { 3 } else { 0 };
             let series = (0..3)
@@ -963,10 +964,10 @@ impl Pipeline for AvFusion {
                         .iter()
                         .enumerate()
                         .filter_map(|(i, e)| {
-                            e.map(|e| ((i + 1) as f64 + 0.15 * (m as f64 - 1.0), e))
+                            e.map(|e| ((i + 1) as f64 + BAR_WIDTH * (m as f64 - 1.0), e))
                         })
                         .collect();
-                    Series::new(APPROACHES[a].0, pts, Style::Markers, m)
+                    Series::new(APPROACHES[a].0, pts, Style::Bars, m)
                 })
                 .collect();
             Chart::new(
@@ -990,7 +991,7 @@ impl Pipeline for AvFusion {
                         Series::new(
                             APPROACHES[a].0,
                             vec![((a + 1) as f64, e)],
-                            Style::Markers,
+                            Style::Bars,
                             a % 3,
                         )
                     })
@@ -1017,12 +1018,12 @@ impl Pipeline for AvFusion {
         let mut figures = vec![
             Figure::new(
                 "errors-sum",
-                "Mean error of each pass's track, weighted-sum fusion; a missing marker is a pass where no track formed",
+                "Mean error of each pass's track, weighted-sum fusion; a missing bar is a pass where no track formed",
                 bar_chart(false),
             ),
             Figure::new(
                 "errors-product",
-                "Mean error of each pass's track, product fusion; a missing marker is a pass where no track formed",
+                "Mean error of each pass's track, product fusion; a missing bar is a pass where no track formed",
                 bar_chart(true),
             ),
             Figure::new(
