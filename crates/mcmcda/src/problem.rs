@@ -205,32 +205,21 @@ impl Problem {
             ..self.held.partition_point(|&s| (s as usize) <= scan + d_bar);
         for i in later {
             let d = self.held[i] as usize - scan;
-            found.clear();
-            found.extend(
-                self.members[i]
-                    .iter()
-                    .copied()
-                    .filter(|&other| self.within_of(position, other, d)),
-            );
+            self.neighbours_in(i, position, d, &mut found);
             self.forward[slot * d_bar + d - 1].extend_from_slice(&found);
             for &other in &found {
                 let other = self.slot(other);
                 self.backward[other * d_bar + d - 1].push(id);
             }
         }
-        let earlier = self
-            .held
-            .partition_point(|&s| (s as usize) < scan.saturating_sub(d_bar))
-            ..self.held.partition_point(|&s| (s as usize) < scan);
+        // Where `scan` is (or goes) in `held`: the end of the earlier scans.
+        let at = self.held.partition_point(|&s| (s as usize) < scan);
+        let earlier =
+            self.held
+                .partition_point(|&s| (s as usize) < scan.saturating_sub(d_bar))..at;
         for i in earlier {
             let d = scan - self.held[i] as usize;
-            found.clear();
-            found.extend(
-                self.members[i]
-                    .iter()
-                    .copied()
-                    .filter(|&other| self.within_of(position, other, d)),
-            );
+            self.neighbours_in(i, position, d, &mut found);
             // The new measurement's own lists are filled in one go, not push by push.
             self.backward[slot * d_bar + d - 1].extend_from_slice(&found);
             for &other in &found {
@@ -242,7 +231,6 @@ impl Problem {
             }
         }
         self.scratch = found;
-        let at = self.held.partition_point(|&s| (s as usize) < scan);
         if self.held.get(at) == Some(&(scan as u32)) {
             self.members[at].push(id);
         } else {
@@ -396,6 +384,18 @@ impl Problem {
     /// Whether `a` and `b` can be consecutive measurements of one track `d` scans apart.
     pub fn within(&self, a: MeasId, b: MeasId, d: usize) -> bool {
         self.within_of(self.position(a), b, d)
+    }
+
+    /// Sets `found` to the measurements of the `i`-th held scan within reach of `position`
+    /// `d` scans away.
+    fn neighbours_in(&self, i: usize, position: Vec2, d: usize, found: &mut Vec<MeasId>) {
+        found.clear();
+        found.extend(
+            self.members[i]
+                .iter()
+                .copied()
+                .filter(|&other| self.within_of(position, other, d)),
+        );
     }
 
     /// [`Self::within`] for a measurement at `position`.

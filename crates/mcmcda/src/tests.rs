@@ -1653,34 +1653,88 @@ fn single_track_q_by_prefixes(state: &Partition<'_>, k: usize, from: &[u32], to:
     max + terms.iter().map(|t| (t - max).exp()).sum::<f64>().ln() - (k as f64).ln()
 }
 
-#[test]
-fn single_track_q_by_suffix_sums_equals_the_sum_over_prefixes() {
-    use crate::proposal::{End, FirstStep};
+/// Scans of `n_walkers` walkers at `position(w, t)` over `n_scans` scans (frames 0, 1, …), each
+/// detected with probability `p_detect`, plus the points `clutter` draws per scan; with the
+/// walkers' measurement ids (ids count walkers' detections, then clutter, scan by scan).
+fn walker_scans(
+    rng: &mut ChaCha8Rng,
+    (n_scans, n_walkers, p_detect): (u32, usize, f64),
+    position: impl Fn(f64, f64) -> (f64, f64),
+    clutter: impl Fn(&mut ChaCha8Rng) -> Vec<(f64, f64)>,
+) -> (Vec<Scan>, Vec<Vec<u32>>) {
     use rand::RngExt;
-    // Four walkers close together over 25 scans with misses and clutter, so that candidate
-    // sets hold several free measurements and growth can go astray.
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let mut truth: Vec<Vec<u32>> = vec![Vec::new(); 4];
+    let mut truth: Vec<Vec<u32>> = vec![Vec::new(); n_walkers];
     let mut id = 0u32;
-    let scans: Vec<Scan> = (0..25u32)
+    let scans = (0..n_scans)
         .map(|f| {
-            let t = f64::from(f);
             let mut points = Vec::new();
             for (w, track) in truth.iter_mut().enumerate() {
-                if rng.random_bool(0.8) {
-                    let w = w as f64;
-                    points.push((50.0 * w + 6.0 * t, 40.0 * w + (w - 1.5) * 4.0 * t));
+                if rng.random_bool(p_detect) {
+                    points.push(position(w as f64, f64::from(f)));
                     track.push(id);
                     id += 1;
                 }
             }
-            for _ in 0..rng.random_range(0..3) {
-                points.push((rng.random_range(0.0..300.0), rng.random_range(0.0..300.0)));
-                id += 1;
-            }
+            let noise = clutter(rng);
+            id += noise.len() as u32;
+            points.extend(noise);
             scan(f, &points)
         })
         .collect();
+    (scans, truth)
+}
+
+/// A single-track proposal's new track for `from` (in `state`, where it is removed): a random
+/// end, a random prefix from it kept and regrown as the proposal grows it; `None` when the
+/// result is shorter than two measurements.
+fn regrown_track(
+    state: &mut Partition<'_>,
+    from: &[u32],
+    rng: &mut ChaCha8Rng,
+) -> Option<Vec<u32>> {
+    use crate::proposal::{End, FirstStep};
+    use rand::RngExt;
+    let end = if rng.random_bool(0.5) {
+        End::Tail
+    } else {
+        End::Head
+    };
+    let mut order = from.to_vec();
+    if end == End::Head {
+        order.reverse();
+    }
+    let r = rng.random_range(1..=order.len());
+    let mut to = order[..r].to_vec();
+    state.grow(
+        order[r - 1],
+        end,
+        FirstStep::of_update(r),
+        &mut to,
+        &mut Vec::new(),
+        rng,
+    );
+    if end == End::Head {
+        to.reverse();
+    }
+    (to.len() >= 2).then_some(to)
+}
+
+#[test]
+fn single_track_q_by_suffix_sums_equals_the_sum_over_prefixes() {
+    use rand::RngExt;
+    // Four walkers close together over 25 scans with misses and clutter, so that candidate
+    // sets hold several free measurements and growth can go astray.
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let (scans, truth) = walker_scans(
+        &mut rng,
+        (25, 4, 0.8),
+        |w, t| (50.0 * w + 6.0 * t, 40.0 * w + (w - 1.5) * 4.0 * t),
+        |rng| {
+            (0..rng.random_range(0..3))
+                .map(|_| (rng.random_range(0.0..300.0), rng.random_range(0.0..300.0)))
+                .collect()
+        },
+    );
     for head_probability in [0.0, 0.3, 1.0] {
         let model = McmcdaConfig {
             max_speed: 30.0,
@@ -1699,33 +1753,9 @@ fn single_track_q_by_suffix_sums_equals_the_sum_over_prefixes() {
             let old = state.remove(k);
             let from = old.meas.clone();
             for _ in 0..60 {
-                // A proposal's new track: keep a random prefix at a random end and regrow.
-                let end = if rng.random_bool(0.5) {
-                    End::Tail
-                } else {
-                    End::Head
-                };
-                let mut order = from.clone();
-                if end == End::Head {
-                    order.reverse();
-                }
-                let r = rng.random_range(1..=order.len());
-                let mut to = order[..r].to_vec();
-                let mut buffer = Vec::new();
-                state.grow(
-                    order[r - 1],
-                    end,
-                    FirstStep::of_update(r),
-                    &mut to,
-                    &mut buffer,
-                    &mut rng,
-                );
-                if end == End::Head {
-                    to.reverse();
-                }
-                if to.len() < 2 {
+                let Some(to) = regrown_track(&mut state, &from, &mut rng) else {
                     continue;
-                }
+                };
                 let n_tracks = start.n_tracks();
                 for (a, b) in [(&from, &to), (&to, &from)] {
                     let fast = state.log_single_track_probability(n_tracks, a, b);
@@ -1756,30 +1786,21 @@ fn single_track_q_by_suffix_sums_equals_the_sum_over_prefixes() {
 /// term-by-term sum over prefixes.
 #[test]
 fn single_track_q_stops_early_with_the_full_sums_bits() {
-    use crate::proposal::{EARLY_STOP, EARLY_STOPS, End, FirstStep};
+    use crate::proposal::{EARLY_STOP, EARLY_STOPS};
     use rand::RngExt;
     let mut rng = ChaCha8Rng::seed_from_u64(11);
-    let mut truth: Vec<Vec<u32>> = vec![Vec::new(); 2];
-    let mut id = 0u32;
-    let scans: Vec<Scan> = (0..160u32)
-        .map(|f| {
-            let t = f64::from(f);
-            let mut points = Vec::new();
-            for (w, track) in truth.iter_mut().enumerate() {
-                if rng.random_bool(0.85) {
-                    let w = w as f64;
-                    points.push((40.0 * w + 5.0 * t, 30.0 + 25.0 * w + (w - 0.5) * 0.2 * t));
-                    track.push(id);
-                    id += 1;
-                }
-            }
+    let (scans, truth) = walker_scans(
+        &mut rng,
+        (160, 2, 0.85),
+        |w, t| (40.0 * w + 5.0 * t, 30.0 + 25.0 * w + (w - 0.5) * 0.2 * t),
+        |rng| {
             if rng.random_bool(0.5) {
-                points.push((rng.random_range(0.0..900.0), rng.random_range(0.0..100.0)));
-                id += 1;
+                vec![(rng.random_range(0.0..900.0), rng.random_range(0.0..100.0))]
+            } else {
+                Vec::new()
             }
-            scan(f, &points)
-        })
-        .collect();
+        },
+    );
     let model = McmcdaConfig {
         max_speed: 30.0,
         max_gap: 4,
@@ -1797,31 +1818,9 @@ fn single_track_q_stops_early_with_the_full_sums_bits() {
         let mut state = start.clone();
         let from = state.remove(k).meas;
         for _ in 0..40 {
-            let end = if rng.random_bool(0.5) {
-                End::Tail
-            } else {
-                End::Head
-            };
-            let mut order = from.clone();
-            if end == End::Head {
-                order.reverse();
-            }
-            let r = rng.random_range(1..=order.len());
-            let mut to = order[..r].to_vec();
-            state.grow(
-                order[r - 1],
-                end,
-                FirstStep::of_update(r),
-                &mut to,
-                &mut Vec::new(),
-                &mut rng,
-            );
-            if end == End::Head {
-                to.reverse();
-            }
-            if to.len() < 2 {
+            let Some(to) = regrown_track(&mut state, &from, &mut rng) else {
                 continue;
-            }
+            };
             let n = start.n_tracks();
             for (a, b) in [(&from, &to), (&to, &from)] {
                 let fast = state.log_single_track_probability(n, a, b);
