@@ -1,6 +1,6 @@
 //! The developer searches behind the scenario's settings (never run by the suite): the
 //! single-vehicle search of `[params.tuning]` (`AV_FUSION_TUNE=1`), the multi-vehicle search
-//! of `[params.multi_tuning]` (`AV_FUSION_TUNE_MULTI=1`, or a comma-separated list of approach
+//! of `[params.multi_tuning]` (`AV_FUSION_TUNE_MULTI=all`, or a comma-separated list of approach
 //! indices) and the multi-vehicle error breakdown (`AV_FUSION_DIAG=seed,seed,...`). All run on
 //! the tuning seeds given; the reported seed is only simulated by the normal run.
 
@@ -520,6 +520,14 @@ pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()
         coords.push(("births", t.births_per_scan.clone(), |s, v| {
             s.births_per_scan = Some(v)
         }));
+        coords.push(("max speed", t.max_speed.clone(), |s, v| {
+            s.max_speed = Some(v)
+        }));
+        coords.push((
+            "max gap",
+            t.max_gap.iter().map(|&d| f64::from(d)).collect(),
+            |s, v| s.max_gap = Some(v as u32),
+        ));
         coords.insert(
             0,
             ("explain away", t.explain_away_deg.clone(), |s, v| {
