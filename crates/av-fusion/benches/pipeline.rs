@@ -146,6 +146,7 @@ fn config(rule: FusionRule) -> AvConfig {
                 ..OnlineConfig::default()
             },
             seed: 1,
+            peak_scores: None,
         },
     }
 }

@@ -21,7 +21,8 @@
 //!   with covariances from the peak's second moments ([`PeakMeasurement`]), optionally one at
 //!   a time by explaining away ([`PeakExtraction::explain_away_deg`]);
 //! * [`AvPipeline`] / [`track_reports`]: the peak lists through
-//!   [`mcmcda::OnlineTracker`] into a [`tracker_model::TrackSet`] whose frames are the ticks.
+//!   [`mcmcda::OnlineTracker`] into a [`tracker_model::TrackSet`] whose frames are the ticks,
+//!   optionally with each peak's contrast as a detection score ([`PeakScores`]).
 //!
 //! Three full-circle nodes around a target that moves along x at 10 m/s, fused at 10 Hz by the
 //! floored product and tracked:
@@ -85,6 +86,7 @@
 //!         },
 //!         online: OnlineConfig { window: 8, samples_per_scan: 200, ..OnlineConfig::default() },
 //!         seed: 1,
+//!         peak_scores: None,
 //!     },
 //! };
 //! let run = track_reports(sensors, reports, 30, &config)?;
@@ -120,4 +122,4 @@ pub use fusion::{
     extract_peaks, fuse_grids, fuse_snapshot,
 };
 pub use node::{LobeEqualisation, ProfileShape, Report, SensorKind, SensorNode};
-pub use tracker::{AvConfig, AvPipeline, AvRun, TrackerConfig, track_reports};
+pub use tracker::{AvConfig, AvPipeline, AvRun, PeakScores, TrackerConfig, track_reports};

@@ -416,6 +416,7 @@ fn av_config(rule: FusionRule) -> AvConfig {
                 ..mcmcda::OnlineConfig::default()
             },
             seed: 11,
+            peak_scores: None,
         },
     }
 }
@@ -486,6 +487,65 @@ fn output_is_identical_with_one_and_two_threads() {
     let (one, two) = (run_with(1), run_with(2));
     assert_eq!(one.tracks, two.tracks);
     assert_eq!(one.scans, two.scans);
+}
+
+#[test]
+fn peak_scores_look_up_their_bin_and_reject_bad_tables() {
+    let table = PeakScores {
+        contrast_edges: vec![1.0, 3.0],
+        log_ratios: vec![-2.0, 0.5, 3.0],
+    };
+    table.check().expect("valid");
+    // Bins [.., 1), [1, 3), [3, ..): an edge belongs to the bin above it.
+    for (c, want) in [
+        (0.5, -2.0_f64),
+        (1.0, 0.5),
+        (2.9, 0.5),
+        (3.0, 3.0),
+        (100.0, 3.0),
+    ] {
+        assert_eq!(table.log_ratio(c).to_bits(), want.to_bits(), "contrast {c}");
+    }
+    let bad = [
+        PeakScores {
+            contrast_edges: vec![1.0, 3.0],
+            log_ratios: vec![0.0, 0.0],
+        },
+        PeakScores {
+            contrast_edges: vec![3.0, 1.0],
+            log_ratios: vec![0.0; 3],
+        },
+        PeakScores {
+            contrast_edges: vec![1.0],
+            log_ratios: vec![0.0, f64::NAN],
+        },
+    ];
+    for table in bad {
+        assert!(table.check().is_err(), "{table:?}");
+        let mut config = av_config(FusionRule::Product { floor: 0.05 });
+        config.tracker.peak_scores = Some(table);
+        assert!(AvPipeline::new(road_sensors(), &config).is_err());
+    }
+}
+
+#[test]
+fn peak_scores_reach_the_tracker() {
+    let sensors = road_sensors();
+    let reports = noise_free_reports(&sensors, 4.0);
+    let run = |scores: Option<f64>| {
+        let mut config = av_config(FusionRule::Product { floor: 0.05 });
+        config.tracker.peak_scores = scores.map(|r| PeakScores {
+            contrast_edges: Vec::new(),
+            log_ratios: vec![r],
+        });
+        track_reports(sensors.clone(), reports.clone(), 40, &config).expect("runs")
+    };
+    let plain = run(None);
+    assert_eq!(plain.tracks.len(), 1);
+    // A ratio of 0 everywhere is the unscored posterior, to the bit.
+    assert_eq!(run(Some(0.0)).tracks, plain.tracks);
+    // Every peak e⁻⁵⁰ times likelier to be clutter than a vehicle: no track is worth it.
+    assert!(run(Some(-50.0)).tracks.is_empty());
 }
 
 #[test]

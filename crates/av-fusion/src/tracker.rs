@@ -23,6 +23,61 @@ pub struct TrackerConfig {
     pub online: OnlineConfig,
     /// Seed of the sampler's ChaCha8 generator.
     pub seed: u64,
+    /// The peaks' values as detection scores (`None`: every peak counts the same, as the
+    /// plain MCMCDA posterior has it).
+    #[serde(default)]
+    pub peak_scores: Option<PeakScores>,
+}
+
+/// The score likelihood ratio ln f₁(c)/f₀(c) of a peak as a function of its contrast c, the
+/// fused grid's value at the peak over the grid's mean value (the grid sums to 1, so
+/// c = value × cells): piecewise constant, `log_ratios[i]` for c in
+/// \[`contrast_edges[i − 1]`, `contrast_edges[i]`) with the outer bins open-ended. MCMCDA adds
+/// it to a track's term for every peak the track holds (Lerro & Bar-Shalom's amplitude
+/// likelihood ratio, through [`mcmcda::OnlineTracker::push_scan_scored`]), so a strong peak
+/// is readily a vehicle and a weak one readily clutter. The table is learnt offline, e.g. from
+/// histograms of the contrasts of peaks near and far from known vehicles on calibration runs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PeakScores {
+    /// Strictly increasing, finite.
+    pub contrast_edges: Vec<f64>,
+    /// One more than the edges, finite.
+    pub log_ratios: Vec<f64>,
+}
+
+impl PeakScores {
+    /// Checks the table's shape and values.
+    pub fn check(&self) -> Result<()> {
+        if self.log_ratios.len() != self.contrast_edges.len() + 1 {
+            return Err(invalid(
+                "log_ratios",
+                format!(
+                    "{} values for {} edges; it needs one more than the edges",
+                    self.log_ratios.len(),
+                    self.contrast_edges.len()
+                ),
+            ));
+        }
+        if let Some(x) = self
+            .contrast_edges
+            .iter()
+            .chain(&self.log_ratios)
+            .find(|x| !x.is_finite())
+        {
+            return Err(invalid("peak_scores", format!("{x} is not finite")));
+        }
+        if self.contrast_edges.windows(2).any(|w| w[0] >= w[1]) {
+            return Err(invalid("contrast_edges", "must be strictly increasing"));
+        }
+        Ok(())
+    }
+
+    /// ln f₁(c)/f₀(c) of a peak of contrast `contrast`.
+    pub fn log_ratio(&self, contrast: f64) -> f64 {
+        let bin = self.contrast_edges.partition_point(|&e| e <= contrast);
+        self.log_ratios[bin]
+    }
 }
 
 /// Everything the pipeline needs.
@@ -43,6 +98,9 @@ impl AvConfig {
         self.scheduler.check()?;
         self.fusion.check()?;
         self.tracker.online.check()?;
+        if let Some(scores) = &self.tracker.peak_scores {
+            scores.check()?;
+        }
         let motion_dt_s = self.tracker.mcmcda.motion.dt_s();
         let tick_s = self.scheduler.period_s();
         if (motion_dt_s - tick_s).abs() > 1e-9 * tick_s {
@@ -59,6 +117,7 @@ impl AvConfig {
 pub struct AvPipeline {
     node: FusionNode,
     fusion: FusionConfig,
+    peak_scores: Option<PeakScores>,
     tracker: OnlineTracker,
     clock: FrameClock,
     next_tick: u64,
@@ -74,6 +133,7 @@ impl AvPipeline {
         Ok(Self {
             node,
             fusion: config.fusion.clone(),
+            peak_scores: config.tracker.peak_scores.clone(),
             tracker: OnlineTracker::new(model, 0, config.tracker.online, config.tracker.seed)?,
             clock,
             next_tick: 0,
@@ -112,7 +172,18 @@ impl AvPipeline {
         let frame = Frame::try_from(k).map_err(|_| invalid("tick", format!("{k} exceeds u32")))?;
         let scan = fuse_snapshot(self.node.sensors(), &self.node.snapshot(k), &self.fusion)?;
         let points: Vec<_> = scan.peaks.iter().map(|p| p.position).collect();
-        let step = self.tracker.push_scan(frame, &points)?;
+        let step = match &self.peak_scores {
+            None => self.tracker.push_scan(frame, &points)?,
+            Some(scores) => {
+                let cells = scan.grid.values().len() as f64;
+                let ratios: Vec<f64> = scan
+                    .peaks
+                    .iter()
+                    .map(|p| scores.log_ratio(p.value * cells))
+                    .collect();
+                self.tracker.push_scan_scored(frame, &points, &ratios)?
+            }
+        };
         self.next_tick = k + 1;
         Ok((scan, step))
     }

@@ -9,12 +9,13 @@
 //! product) over nine single-vehicle passes of the paper's durations (2.75–4.5 s), error
 //! against camera calibration error, and runs with two and three vehicles (OSPA, MOTA).
 
+use std::collections::BTreeMap;
 use std::f64::consts::PI;
 
 use anyhow::{Result, ensure};
 use av_fusion::{
-    AvConfig, FusionConfig, FusionRule, LobeEqualisation, Modalities, PeakExtraction, Report,
-    SchedulerConfig, SensorKind, SensorNode, SumScaling, TrackerConfig, track_reports,
+    AvConfig, FusionConfig, FusionRule, LobeEqualisation, Modalities, PeakExtraction, PeakScores,
+    Report, SchedulerConfig, SensorKind, SensorNode, SumScaling, TrackerConfig, track_reports,
 };
 use eval_metrics::{EvalConfig, MatchConfig, OspaConfig, evaluate, mean_error_per_track};
 use mcmcda::{McmcdaConfig, OnlineConfig};
@@ -168,6 +169,10 @@ pub struct ApproachSettings {
     max_speed: Option<f64>,
     #[serde(default)]
     max_gap: Option<u32>,
+    /// The peaks' contrasts go to MCMCDA as detection scores, by the approach's table in
+    /// `[params.multi_peak_scores]` (which must then exist; false: every peak counts the same).
+    #[serde(default)]
+    scored: bool,
 }
 
 fn one() -> f64 {
@@ -302,6 +307,13 @@ pub struct Params {
     /// Each approach's settings for the multi-vehicle runs (`[params.multi_settings]`),
     /// chosen for it alone by [`MultiTuning`]'s search on the tuning seeds' multi-vehicle runs.
     multi_settings: Settings,
+    /// Each approach's peak-score table for the multi-vehicle runs, keyed as the settings
+    /// are (`audio_sum`, ..., `audio_video_product`; an approach left out is unscored),
+    /// learnt on the tuning seeds by `tuning::fit_peak_scores` (`AV_FUSION_FIT_SCORES`).
+    #[serde(default)]
+    multi_peak_scores: BTreeMap<String, PeakScores>,
+    /// How `multi_peak_scores` are learnt.
+    score_fit: ScoreFit,
     /// Peak extraction (κ and the NMS radius come from the approach's settings).
     peaks: PeakExtraction,
     /// The tracker (p_d and the clutter rate come from the approach's settings; motion
@@ -421,8 +433,39 @@ fn settings_of(p: &Params, a: usize, multi: bool) -> &ApproachSettings {
     }
 }
 
-/// Approach `a`'s configuration with settings `s` over the shared ones.
-fn av_config(p: &Params, a: usize, s: &ApproachSettings) -> Result<AvConfig> {
+/// Approach `a`'s key in `[params.settings]`, `[params.multi_settings]` and
+/// `[params.multi_peak_scores]`.
+fn settings_key(a: usize) -> String {
+    key(APPROACHES[a].0).replace("audiovideo", "audio_video")
+}
+
+/// Approach `a`'s peak scores under settings `s` (none unless `s.scored`; only the
+/// multi-vehicle runs have tables).
+fn peak_scores_of<'p>(
+    p: &'p Params,
+    a: usize,
+    s: &ApproachSettings,
+) -> Result<Option<&'p PeakScores>> {
+    if !s.scored {
+        return Ok(None);
+    }
+    let key = settings_key(a);
+    match p.multi_peak_scores.get(&key) {
+        Some(table) => Ok(Some(table)),
+        None => {
+            anyhow::bail!("approach {key} is scored but [params.multi_peak_scores] has no {key}")
+        }
+    }
+}
+
+/// Approach `a`'s configuration with settings `s` and peak scores `scores` over the shared
+/// ones.
+fn av_config(
+    p: &Params,
+    a: usize,
+    s: &ApproachSettings,
+    scores: Option<&PeakScores>,
+) -> Result<AvConfig> {
     let (name, modalities, product) = APPROACHES[a];
     let rule = if product {
         let Some(floor) = s.product_floor else {
@@ -467,6 +510,7 @@ fn av_config(p: &Params, a: usize, s: &ApproachSettings) -> Result<AvConfig> {
             mcmcda,
             online: p.online,
             seed: 1,
+            peak_scores: scores.cloned(),
         },
     })
 }
@@ -493,13 +537,14 @@ fn score_with(
     calib: Calibration,
     a: usize,
     s: &ApproachSettings,
+    scores: Option<&PeakScores>,
 ) -> Result<Score> {
     let nodes = sensor_nodes(p, calib, s)?;
     let result = track_reports(
         nodes,
         sim.reports.clone(),
         sim.n_ticks,
-        &av_config(p, a, s)?,
+        &av_config(p, a, s, scores)?,
     )?;
     let gt = &sim.gt;
     let pairs = mean_error_per_track(gt, &result.tracks, p.match_distance_m)?;
@@ -540,7 +585,8 @@ fn score_with(
 
 /// Approach `a` on one simulated run with its own settings for the run's vehicle count.
 fn score(p: &Params, sim: &Simulated, calib: Calibration, a: usize) -> Result<Score> {
-    score_with(p, sim, calib, a, settings_of(p, a, sim.multi))
+    let s = settings_of(p, a, sim.multi);
+    score_with(p, sim, calib, a, s, peak_scores_of(p, a, s)?)
 }
 
 fn nominal(p: &Params) -> Calibration {
@@ -564,7 +610,7 @@ fn run_one(p: &Params, run: &RunSpec, rng: &mut ChaCha8Rng, want_map: bool) -> R
         ospa.push(s.ospa);
         // What the multi-vehicle settings bring: audio+video with its single-vehicle ones.
         mota_single_settings.push(if sim.multi && *modalities == Modalities::Both {
-            Some(score_with(p, &sim, nominal(p), a, p.settings.get(a))?.mota)
+            Some(score_with(p, &sim, nominal(p), a, p.settings.get(a), None)?.mota)
         } else {
             None
         });
@@ -694,10 +740,18 @@ impl Pipeline for AvFusion {
             p.passes.iter().all(|s| s.duration_s > 0.0),
             "pass durations must be > 0"
         );
+        let keys: Vec<String> = (0..APPROACHES.len()).map(settings_key).collect();
+        for k in p.multi_peak_scores.keys() {
+            ensure!(
+                keys.contains(k),
+                "[params.multi_peak_scores]: unknown approach {k} (one of {})",
+                keys.join(", ")
+            );
+        }
         for a in 0..APPROACHES.len() {
             for multi in [false, true] {
                 let s = settings_of(p, a, multi);
-                av_config(p, a, s)?.check()?;
+                av_config(p, a, s, peak_scores_of(p, a, s)?)?.check()?;
                 for n in sensor_nodes(p, nominal(p), s)? {
                     n.check()?;
                 }
@@ -706,6 +760,9 @@ impl Pipeline for AvFusion {
         let runs = run_specs(p)?;
         if std::env::var_os(TUNE_ENV).is_some() {
             print_tuning(p, &runs)?;
+        }
+        if let Some(which) = std::env::var_os(FIT_SCORES_ENV) {
+            fit_peak_scores(p, &runs, &which.to_string_lossy())?;
         }
         if let Some(which) = std::env::var_os(TUNE_MULTI_ENV) {
             tune_multi(p, &runs, &which.to_string_lossy())?;
@@ -1202,7 +1259,8 @@ impl Pipeline for AvFusion {
                  small weight and fusion improves on audio by centimetres, not metres. With two and \
                  three vehicles the runs use each approach's own multi-vehicle settings (lobe \
                  equalisation of the profiles, own exponents, κ, MCMCDA rates, speed limit and \
-                 largest gap, tuned by MOTA on the tuning seeds' multi-vehicle runs); the broad \
+                 largest gap, and the peaks' contrasts as MCMCDA detection scores where that \
+                 helps, tuned by MOTA on the tuning seeds' multi-vehicle runs); the broad \
                  audio beams still merge and a masked vehicle's peak is often missing: \
                  audio+video MOTA is {} (sum) and {} (product) over the three runs, short of 0.8 \
                  {} (table below). Audio alone has a higher MOTA than \

@@ -59,7 +59,7 @@ pub(super) fn tune_score(p: &Params, sims: &[(bool, Simulated)], a: usize) -> Re
         .map(|(multi, sim)| {
             Ok((
                 *multi,
-                score_with(p, sim, nominal(p), a, p.settings.get(a))?,
+                score_with(p, sim, nominal(p), a, p.settings.get(a), None)?,
             ))
         })
         .collect::<Result<_>>()?;
@@ -412,6 +412,169 @@ pub(super) fn tune(p: &Params, runs: &[RunSpec]) -> Result<String> {
     Ok(out)
 }
 
+/// Setting this environment variable (`all`, or approach indices) learns the peak-score tables
+/// of `[params.multi_peak_scores]` first and prints them as TOML.
+pub(super) const FIT_SCORES_ENV: &str = "AV_FUSION_FIT_SCORES";
+
+/// How the peak-score tables are learnt (`[params.score_fit]`).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScoreFit {
+    /// Tuning seeds (never the reported one).
+    pub(super) seeds: Vec<u64>,
+    /// Peaks per tick while learning (≥ the largest `max_peaks` the search may choose, so
+    /// the table covers the weak peaks too).
+    pub(super) max_peaks: usize,
+    /// Bins of the table (edges at the pooled contrasts' quantiles).
+    pub(super) bins: usize,
+    /// A peak within this distance of a vehicle at its tick counts as the vehicle's.
+    pub(super) near_m: f64,
+}
+
+/// The score tables of `[params.multi_peak_scores]`: for each approach, with its
+/// multi-vehicle settings (but `score_fit.max_peaks` peaks per tick), every peak of the tuning
+/// seeds' multi-vehicle runs is labelled by whether a vehicle is within `near_m` at its tick
+/// (the truth of calibration runs, as a detector's confidence is calibrated on labelled data;
+/// the reported seed is never simulated here). The contrasts are binned at their pooled
+/// quantiles and each bin's ln f₁/f₀ is the log ratio of its share of the near peaks to its
+/// share of the far ones, each count plus one (Laplace), so an empty bin stays finite.
+#[expect(clippy::print_stderr, reason = "developer tool output")]
+pub(super) fn fit_peak_scores(p: &Params, runs: &[RunSpec], which: &str) -> Result<()> {
+    let f = &p.score_fit;
+    ensure!(f.bins >= 2, "score_fit.bins must be at least 2");
+    ensure!(f.max_peaks >= 1, "score_fit.max_peaks must be at least 1");
+    ensure!(f.near_m > 0.0, "score_fit.near_m must be > 0");
+    let mut sims = Vec::new();
+    for &seed in &f.seeds {
+        sims.extend(simulate_multi(p, runs, seed)?);
+    }
+    for a in approaches_in(which) {
+        let mut s = *p.multi_settings.get(a);
+        s.max_peaks = Some(f.max_peaks);
+        s.scored = false;
+        // (contrast, near a vehicle) of every peak of every run.
+        let labelled: Vec<Vec<(f64, bool)>> = sims
+            .par_iter()
+            .map(|sim| {
+                let run = score_with(p, sim, nominal(p), a, &s, None)?.result;
+                let mut out = Vec::new();
+                for (k, scan) in run.scans.iter().enumerate() {
+                    let cells = scan.grid.values().len() as f64;
+                    for m in &scan.peaks {
+                        let near = sim.gt.tracks().iter().any(|g| {
+                            g.points().iter().any(|q| {
+                                q.frame as usize == k
+                                    && (q.location.position() - m.position).norm() <= f.near_m
+                            })
+                        });
+                        out.push((m.value * cells, near));
+                    }
+                }
+                Ok(out)
+            })
+            .collect::<Result<_>>()?;
+        let peaks: Vec<(f64, bool)> = labelled.into_iter().flatten().collect();
+        let mut sorted: Vec<f64> = peaks.iter().map(|x| x.0).collect();
+        sorted.sort_by(f64::total_cmp);
+        ensure!(!sorted.is_empty(), "no peaks to learn scores from");
+        let mut edges: Vec<f64> = (1..f.bins)
+            .map(|i| sorted[i * sorted.len() / f.bins])
+            .collect();
+        edges.dedup();
+        let mut counts = vec![[0usize; 2]; edges.len() + 1];
+        for &(c, near) in &peaks {
+            counts[edges.partition_point(|&e| e <= c)][usize::from(near)] += 1;
+        }
+        let (far_n, near_n) = counts
+            .iter()
+            .fold((0, 0), |(f0, f1), c| (f0 + c[0], f1 + c[1]));
+        let b = counts.len() as f64;
+        let log_ratios: Vec<f64> = counts
+            .iter()
+            .map(|c| {
+                ((c[1] + 1) as f64 / (near_n as f64 + b)).ln()
+                    - ((c[0] + 1) as f64 / (far_n as f64 + b)).ln()
+            })
+            .collect();
+        let table = PeakScores {
+            contrast_edges: edges,
+            log_ratios,
+        };
+        table.check()?;
+        eprintln!(
+            "scores {} ({near_n} near, {far_n} far peaks; per bin far/near {counts:?}):",
+            APPROACHES[a].0
+        );
+        let fmt = |v: &[f64]| {
+            v.iter()
+                .map(|x| format!("{x:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        eprintln!(
+            "{} = {{ contrast_edges = [{}], log_ratios = [{}] }}",
+            settings_key(a),
+            fmt(&table.contrast_edges),
+            fmt(&table.log_ratios)
+        );
+    }
+    Ok(())
+}
+
+/// The approaches named by a developer variable: comma-separated indices into
+/// `APPROACHES`, anything else all six.
+fn approaches_in(which: &str) -> Vec<usize> {
+    let order: Vec<usize> = which
+        .split(',')
+        .filter_map(|s| s.trim().parse().ok())
+        .filter(|&a: &usize| a < APPROACHES.len())
+        .collect();
+    if order.is_empty() {
+        (0..APPROACHES.len()).collect()
+    } else {
+        order
+    }
+}
+
+/// From `start`, one coordinate at a time over its candidates (the others held), keeping a
+/// candidate that raises `objective`; rounds repeat until one changes nothing, at most
+/// `max_rounds` (≥ 1). Returns the end point and its objective.
+#[expect(clippy::print_stderr, reason = "developer tool output")]
+fn coordinate_search(
+    name: &str,
+    start: ApproachSettings,
+    coords: &[Coordinate],
+    max_rounds: usize,
+    objective: impl Fn(&ApproachSettings) -> Result<(f64, Vec<f64>)>,
+) -> Result<(ApproachSettings, f64)> {
+    let mut best = start;
+    let (mut best_score, motas) = objective(&best)?;
+    eprintln!("multi {name}: from {start:?}: MOTA {best_score:.3} {motas:.2?}");
+    for round in 1..=max_rounds.max(1) {
+        let before = best;
+        for (what, values, set) in coords {
+            for &v in values {
+                let mut c = best;
+                set(&mut c, v);
+                if c == best {
+                    continue;
+                }
+                let (m, motas) = objective(&c)?;
+                eprintln!("multi {name} round {round}: {what} {v}: MOTA {m:.3} {motas:.2?}");
+                if m > best_score {
+                    best = c;
+                    best_score = m;
+                }
+            }
+        }
+        eprintln!("multi {name} round {round} choice: MOTA {best_score:.3} {best:?}");
+        if best == before {
+            break;
+        }
+    }
+    Ok((best, best_score))
+}
+
 /// Setting this environment variable runs [`MultiTuning`]'s search first and prints it.
 pub(super) const TUNE_MULTI_ENV: &str = "AV_FUSION_TUNE_MULTI";
 
@@ -439,15 +602,7 @@ pub(super) fn lobes_with(
     reason = "the search takes minutes: each line goes to the terminal as it is measured"
 )]
 pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()> {
-    // Which approaches (indices into APPROACHES, comma-separated; anything else: all six).
-    let mut order: Vec<usize> = which
-        .split(',')
-        .filter_map(|s| s.trim().parse().ok())
-        .filter(|&a: &usize| a < APPROACHES.len())
-        .collect();
-    if order.is_empty() {
-        order = (0..APPROACHES.len()).collect();
-    }
+    let order = approaches_in(which);
     let t = &p.multi_tuning;
     let mut sims = Vec::new();
     for &seed in &t.seeds {
@@ -456,7 +611,7 @@ pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()
     let objective = |a: usize, s: &ApproachSettings| -> Result<(f64, Vec<f64>)> {
         let motas: Vec<f64> = sims
             .par_iter()
-            .map(|sim| Ok(score_with(p, sim, nominal(p), a, s)?.mota))
+            .map(|sim| Ok(score_with(p, sim, nominal(p), a, s, peak_scores_of(p, a, s)?)?.mota))
             .collect::<Result<_>>()?;
         Ok((motas.iter().sum::<f64>() / motas.len().max(1) as f64, motas))
     };
@@ -520,6 +675,9 @@ pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()
         coords.push(("births", t.births_per_scan.clone(), |s, v| {
             s.births_per_scan = Some(v)
         }));
+        if p.multi_peak_scores.contains_key(&settings_key(a)) {
+            coords.push(("scored", vec![0.0, 1.0], |s, v| s.scored = v > 0.5));
+        }
         coords.push(("max speed", t.max_speed.clone(), |s, v| {
             s.max_speed = Some(v)
         }));
@@ -534,36 +692,30 @@ pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()
                 s.explain_away_deg = v
             }),
         );
-        let mut best = *p.multi_settings.get(a);
-        let (mut best_score, motas) = objective(a, &best)?;
-        eprintln!("multi {name}: as configured: MOTA {best_score:.3} {motas:.2?}");
-        for round in 1..=t.max_rounds.max(1) {
-            let before = best;
-            for (what, values, set) in &coords {
-                for &v in values {
-                    let mut c = best;
-                    set(&mut c, v);
-                    if c == best {
-                        continue;
-                    }
-                    let (m, motas) = objective(a, &c)?;
-                    eprintln!("multi {name} round {round}: {what} {v}: MOTA {m:.3} {motas:.2?}");
-                    if m > best_score {
-                        best = c;
-                        best_score = m;
-                    }
-                }
-            }
-            eprintln!("multi {name} round {round} choice: MOTA {best_score:.3} {best:?}");
-            if best == before {
-                break;
+        // Scores change what every rate and threshold should be, so turning them on alone
+        // from settings tuned without them rarely pays: an approach with a score table is
+        // searched from both starts (unscored and scored), and the better end point is kept.
+        let configured = *p.multi_settings.get(a);
+        let starts: Vec<ApproachSettings> = if p.multi_peak_scores.contains_key(&settings_key(a)) {
+            [false, true]
+                .iter()
+                .map(|&scored| ApproachSettings {
+                    scored,
+                    ..configured
+                })
+                .collect()
+        } else {
+            vec![configured]
+        };
+        let (mut best, mut best_score) = (configured, f64::NEG_INFINITY);
+        for start in starts {
+            let (end, score) =
+                coordinate_search(name, start, &coords, t.max_rounds, |c| objective(a, c))?;
+            if score > best_score {
+                (best, best_score) = (end, score);
             }
         }
-        chosen.push((
-            key(name).replace("audiovideo", "audio_video"),
-            best,
-            best_score,
-        ));
+        chosen.push((settings_key(a), best, best_score));
     }
     for (k, s, m) in chosen {
         eprintln!("{k} (MOTA {m:.3}) = {s:?}");
