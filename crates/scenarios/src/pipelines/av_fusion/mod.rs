@@ -1183,42 +1183,30 @@ impl Pipeline for AvFusion {
                 }
             })
             .collect();
-        // The multi-vehicle runs below the MOTA 0.8, per rule.
-        let short_of_target: Vec<String> = [(2usize, "sum"), (5, "product")]
-            .iter()
-            .map(|&(a, rule)| {
-                let runs: Vec<String> = out
-                    .multi
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, (_, mota, _))| mota[a] < 0.8)
-                    .map(|(r, _)| (r + 1).to_string())
-                    .collect();
-                if runs.is_empty() {
-                    format!("under the {rule} rule on no run")
-                } else {
-                    format!("under the {rule} rule on runs {}", runs.join(", "))
-                }
-            })
-            .collect();
-        // And on the multi-vehicle runs, by MOTA.
-        let audio_wins_multi: Vec<String> = [(0usize, 2usize, "sum"), (3, 5, "product")]
-            .iter()
-            .map(|&(a, b, rule)| {
-                let runs: Vec<String> = out
-                    .multi
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, (_, mota, _))| mota[a] > mota[b])
-                    .map(|(r, _)| (r + 1).to_string())
-                    .collect();
-                if runs.is_empty() {
-                    format!("under the {rule} rule, on no run")
-                } else {
-                    format!("under the {rule} rule, on runs {}", runs.join(", "))
-                }
-            })
-            .collect();
+        // The multi-vehicle runs (numbered from 1) whose MOTAs satisfy `pick`, per rule.
+        let runs_where = |a: usize, b: usize, rule: &str, pick: fn(f64, f64) -> bool| {
+            let runs: Vec<String> = out
+                .multi
+                .iter()
+                .enumerate()
+                .filter(|(_, (_, mota, _))| pick(mota[a], mota[b]))
+                .map(|(r, _)| (r + 1).to_string())
+                .collect();
+            if runs.is_empty() {
+                format!("under the {rule} rule, on no run")
+            } else {
+                format!("under the {rule} rule, on runs {}", runs.join(", "))
+            }
+        };
+        // Audio+video below the MOTA 0.8, and audio alone ahead of it.
+        let short_of_target = [
+            runs_where(2, 2, "sum", |m, _| m < 0.8),
+            runs_where(5, 5, "product", |m, _| m < 0.8),
+        ];
+        let audio_wins_multi = [
+            runs_where(0, 2, "sum", |audio, both| audio > both),
+            runs_where(3, 5, "product", |audio, both| audio > both),
+        ];
         let av = |a: usize| average(&out.errors[a]).map_or("—".into(), fmt_num);
         let gain = |a: usize| {
             fusion_gain(out, a, Modalities::Audio).map_or("—".into(), |(m, c)| {
