@@ -11,7 +11,11 @@
 //! newborn group it came from, so identities persist across frames and through resampling.
 //!
 //! Particle work runs on rayon in fixed chunks, each with its own generator stream, and sums are
-//! reduced in chunk order: results depend on the seed only, not on the thread count.
+//! reduced in chunk order: results depend on the seed only, not on the thread count. A frame
+//! forks twice (the prediction with its likelihoods beside the newborn groups, then the
+//! update). A caller stepping many small frames should step from a thread of rayon's pool
+//! (inside `rayon::scope`, say): from outside it, each fork is handed to the pool and waited
+//! for, which on frames of a few thousand particles costs about what the second thread saves.
 
 use std::collections::BTreeMap;
 
@@ -34,6 +38,10 @@ const CHUNK: usize = 2048;
 /// smaller than [`CHUNK`] so that the 2,000-4,000 particles of a frame split evenly over two
 /// threads (their per-measurement sums are still reduced in chunk order).
 const SUM_CHUNK: usize = 512;
+
+// A predicted chunk's likelihoods are computed in the same work item, by sub-chunks that are
+// the frame's `SUM_CHUNK` chunks.
+const _: () = assert!(CHUNK.is_multiple_of(SUM_CHUNK));
 
 /// One weighted particle.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -78,6 +86,8 @@ pub struct SmcPhd {
     config: PhdConfig,
     likelihood: Likelihood,
     particles: Vec<Particle>,
+    /// The previous frame's particle vector, empty, reused by the next resampling.
+    spare: Vec<Particle>,
     next_label: u64,
     rng: ChaCha8Rng,
 }
@@ -170,30 +180,43 @@ fn stream_rng(seed: u64, stream: usize) -> ChaCha8Rng {
 /// The frame's measurements sorted by centre x, so that a particle visits only those within
 /// the likelihood's reach instead of all of them.
 struct SortedByX {
-    xs: Vec<f64>,
-    index: Vec<usize>,
+    /// The measurements in increasing c_x (copied, so that a particle's candidates are
+    /// adjacent in memory).
+    zs: Vec<BoxMeasurement>,
+    /// Each one's index in the frame.
+    index: Vec<u32>,
     reach: f64,
 }
 
 impl SortedByX {
     fn new(zs: &[BoxMeasurement], reach: f64) -> Self {
-        let mut index: Vec<usize> = (0..zs.len()).collect();
-        index.sort_by(|&a, &b| zs[a][0].total_cmp(&zs[b][0]).then(a.cmp(&b)));
+        let mut index: Vec<u32> = (0..zs.len() as u32).collect();
+        index.sort_by(|&a, &b| {
+            zs[a as usize][0]
+                .total_cmp(&zs[b as usize][0])
+                .then(a.cmp(&b))
+        });
         Self {
-            xs: index.iter().map(|&j| zs[j][0]).collect(),
+            zs: index.iter().map(|&j| zs[j as usize]).collect(),
             index,
             reach,
         }
     }
 
-    /// Indices of the measurements whose c_x is within reach of `x`, in increasing c_x.
-    fn near(&self, x: f64) -> impl Iterator<Item = usize> + '_ {
-        let start = self.xs.partition_point(|&v| v < x - self.reach);
-        self.xs[start..]
-            .iter()
-            .take_while(move |&&v| v <= x + self.reach)
-            .zip(&self.index[start..])
-            .map(|(_, &j)| j)
+    /// The first measurement whose c_x is at least `x − reach`, found by moving from `from`
+    /// (the previous particle's answer) rather than by a binary search: the particles of one
+    /// target are adjacent and close, so the answer rarely moves. (For a NaN `x` the answer
+    /// is `from`, and no measurement is within reach of it anyway.)
+    fn first_within(&self, x: f64, from: usize) -> usize {
+        let lo = x - self.reach;
+        let mut s = from.min(self.zs.len());
+        while s > 0 && self.zs[s - 1][0] >= lo {
+            s -= 1;
+        }
+        while s < self.zs.len() && self.zs[s][0] < lo {
+            s += 1;
+        }
+        s
     }
 }
 
@@ -205,10 +228,15 @@ type ChunkDensities = (Vec<(u32, u32, f64)>, Vec<f64>);
 struct Likelihoods {
     /// Per chunk of persistent particles: the non-zero g(z|x_i) and Σ p_D g w per z.
     persistent: Vec<ChunkDensities>,
-    /// g(z|x) of each newborn group's particles under its own measurement.
-    newborn: Vec<Vec<f64>>,
     /// L(z) per measurement.
     normaliser: Vec<f64>,
+}
+
+/// The frame's newborn groups: J_b particles per measurement, in measurement order, each
+/// with g(z|x) under its own measurement z (a newborn is updated by that z only).
+struct Newborn {
+    particles: Vec<Particle>,
+    density: Vec<f64>,
 }
 
 /// Per-measurement sums of one chunk of persistent particles.
@@ -229,6 +257,7 @@ impl SmcPhd {
             likelihood: Likelihood::new(&config.measurement_std),
             config,
             particles: Vec::new(),
+            spare: Vec::new(),
             next_label: 0,
             rng: ChaCha8Rng::seed_from_u64(seed),
         })
@@ -268,18 +297,16 @@ impl SmcPhd {
             .collect();
         let skipped = boxes.len() - valid.len();
         let zs: Vec<BoxMeasurement> = valid.iter().map(|v| v.1).collect();
-        self.predict(frames);
         let nu = if zs.is_empty() {
             0.0
         } else {
             self.config.birth_rate / zs.len() as f64
         };
-        let newborn = self.spawn_newborn(&zs, nu);
-        let likelihoods = self.likelihoods(&zs, nu, &newborn);
+        let (newborn, likelihoods) = self.predict_and_weigh(frames, &zs, nu);
         let groups = self.update(&likelihoods);
         let expected_targets: f64 = self.particles.iter().map(|p| p.w).sum();
         let estimates = self.extract(groups, &valid);
-        self.resample_particles(expected_targets, newborn, &likelihoods);
+        self.resample_particles(expected_targets, &newborn, &likelihoods);
         Ok(PhdStep {
             estimates,
             expected_targets,
@@ -287,92 +314,52 @@ impl SmcPhd {
         })
     }
 
-    /// Predict over `frames` frames: moves every persistent particle by the exact transition
-    /// and weights it by p_S per frame and 1 − p_D per empty frame between.
-    fn predict(&mut self, frames: u64) {
-        let cfg = self.config;
-        let survive = cfg.gap_weight(frames);
-        let seed: u64 = self.rng.random();
-        self.particles
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(c, chunk)| {
-                let mut rng = stream_rng(seed, c);
-                for p in chunk {
-                    propagate_by(&mut p.x, &cfg.motion, frames, &mut rng);
-                    p.w *= survive;
-                }
-            });
-    }
-
-    /// Newborn groups, one per measurement, drawn around it, each of total weight `nu` and
-    /// with a fresh label.
-    fn spawn_newborn(&mut self, zs: &[BoxMeasurement], nu: f64) -> Vec<Vec<Particle>> {
-        let cfg = self.config;
-        let birth_seed: u64 = self.rng.random();
-        let first_label = self.next_label;
-        self.next_label += zs.len() as u64;
-        zs.par_iter()
-            .enumerate()
-            .map(|(j, z)| {
-                let mut rng = stream_rng(birth_seed, j);
-                (0..cfg.birth_particles)
-                    .map(|_| {
-                        let mut x = [0.0; 6];
-                        for k in 0..4 {
-                            x[k] = z[k] + cfg.measurement_std[k] * normal(&mut rng);
-                        }
-                        x[2] = x[2].max(1.0);
-                        x[3] = x[3].max(1.0);
-                        if let Motion::ConstantVelocity { .. } = cfg.motion {
-                            x[4] = cfg.birth_velocity_std * normal(&mut rng);
-                            x[5] = cfg.birth_velocity_std * normal(&mut rng);
-                        }
-                        Particle {
-                            x,
-                            w: nu / cfg.birth_particles as f64,
-                            label: first_label + j as u64,
-                        }
-                    })
-                    .collect()
-            })
-            .collect()
-    }
-
-    /// L(z) = κ + ν_b(z) ḡ_b(z) + Σ_i p_D g(z|x_i) w_i, with the likelihoods it is made of.
-    fn likelihoods(
-        &self,
+    /// Predicts the persistent particles over `frames` frames (the exact transition, weight
+    /// p_S per frame and 1 − p_D per empty frame between), draws the newborn groups (one per
+    /// measurement, around it, of total weight `nu`, with a fresh label), and computes every
+    /// likelihood and L(z) = κ + ν_b(z) ḡ_b(z) + Σ_i p_D g(z|x_i) w_i.
+    ///
+    /// One parallel pass: each chunk of persistent particles is weighed as soon as it is
+    /// predicted, while the newborn groups are drawn and weighed beside it (the two need
+    /// nothing from each other), so that a frame waits for its threads twice (here and in the
+    /// update) rather than at every step.
+    fn predict_and_weigh(
+        &mut self,
+        frames: u64,
         zs: &[BoxMeasurement],
         nu: f64,
-        newborn: &[Vec<Particle>],
-    ) -> Likelihoods {
+    ) -> (Newborn, Likelihoods) {
         let cfg = self.config;
         let lik = self.likelihood;
         let p_d = cfg.p_detect;
-        let n_z = zs.len();
+        let survive = cfg.gap_weight(frames);
+        // Drawn in this order whatever runs first: the streams do not depend on the threads.
+        let seed: u64 = self.rng.random();
+        let birth_seed: u64 = self.rng.random();
+        let first_label = self.next_label;
+        self.next_label += zs.len() as u64;
         let sorted = SortedByX::new(zs, lik.reach_x());
-        // One pass computes every non-zero g(z|x_i) once, per chunk as (particle, z, g), and
-        // the chunk's sums; the update pass reuses them.
-        let persistent: Vec<ChunkDensities> = self
-            .particles
-            .par_chunks(SUM_CHUNK)
-            .map(|chunk| {
-                let mut sums = vec![0.0; n_z];
-                // About one measurement within reach per particle: room for that up front.
-                let mut pairs = Vec::with_capacity(chunk.len());
-                for (i, p) in chunk.iter().enumerate() {
-                    for j in sorted.near(p.x[0]) {
-                        let d = lik.density(&zs[j], &p.x);
-                        if d > 0.0 {
-                            sums[j] += p_d * d * p.w;
-                            pairs.push((i as u32, j as u32, d));
-                        }
-                    }
-                }
-                (pairs, sums)
-            })
-            .collect();
-        let mut persistent_sum = vec![0.0; n_z];
+        let (persistent, newborn) = rayon::join(
+            || {
+                // The non-zero g(z|x_i), per chunk as (particle, z, g), and the chunk's
+                // sums: computed once, and reused by the update pass.
+                let per_chunk: Vec<Vec<ChunkDensities>> = self
+                    .particles
+                    .par_chunks_mut(CHUNK)
+                    .enumerate()
+                    .map(|(c, chunk)| {
+                        predict_chunk(chunk, &cfg.motion, frames, survive, stream_rng(seed, c));
+                        chunk
+                            .par_chunks(SUM_CHUNK)
+                            .map(|sub| chunk_densities(sub, &sorted, &lik, p_d))
+                            .collect()
+                    })
+                    .collect();
+                per_chunk.into_iter().flatten().collect::<Vec<_>>()
+            },
+            || spawn_newborn(&cfg, &lik, zs, nu, birth_seed, first_label),
+        );
+        let mut persistent_sum = vec![0.0; zs.len()];
         for (_, sums) in &persistent {
             persistent_sum
                 .iter_mut()
@@ -380,60 +367,33 @@ impl SmcPhd {
                 .for_each(|(a, b)| *a += b);
         }
         let kappa = cfg.clutter_intensity();
-        let newborn: Vec<Vec<f64>> = newborn
-            .par_iter()
-            .zip(zs)
-            .map(|(group, z)| group.iter().map(|p| lik.density(z, &p.x)).collect())
-            .collect();
-        let normaliser: Vec<f64> = (0..n_z)
-            .map(|j| {
-                let mean_g = newborn[j].iter().sum::<f64>() / newborn[j].len().max(1) as f64;
-                kappa + nu * mean_g + persistent_sum[j]
+        let per_group = cfg.birth_particles;
+        let normaliser: Vec<f64> = newborn
+            .density
+            .chunks(per_group)
+            .zip(&persistent_sum)
+            .map(|(g, persistent)| {
+                let mean_g = g.iter().sum::<f64>() / per_group as f64;
+                kappa + nu * mean_g + persistent
             })
             .collect();
-        Likelihoods {
-            persistent,
+        (
             newborn,
-            normaliser,
-        }
+            Likelihoods {
+                persistent,
+                normaliser,
+            },
+        )
     }
 
     /// Updates the persistent particles and accumulates the grouping sums, per chunk.
     fn update(&mut self, likelihoods: &Likelihoods) -> Vec<Grouping> {
         let p_d = self.config.p_detect;
         let big_l = &likelihoods.normaliser;
-        let n_z = big_l.len();
         self.particles
             .par_chunks_mut(SUM_CHUNK)
             .zip(&likelihoods.persistent)
-            .map(|(chunk, (pairs, _))| {
-                let mut g = Grouping {
-                    mass: vec![0.0; n_z],
-                    mean: vec![[0.0; 6]; n_z],
-                    labels: vec![Vec::new(); n_z],
-                };
-                let mut factor = vec![1.0 - p_d; chunk.len()];
-                for &(i, j, d) in pairs {
-                    let (i, j) = (i as usize, j as usize);
-                    let p = &chunk[i];
-                    let share = p_d * d / big_l[j];
-                    factor[i] += share;
-                    let m = share * p.w;
-                    g.mass[j] += m;
-                    for k in 0..6 {
-                        g.mean[j][k] += m * p.x[k];
-                    }
-                    // Particles of one target are mostly adjacent: extend the last run.
-                    match g.labels[j].last_mut() {
-                        Some((l, acc)) if *l == p.label => *acc += m,
-                        _ => g.labels[j].push((p.label, m)),
-                    }
-                }
-                for (p, f) in chunk.iter_mut().zip(factor) {
-                    p.w *= f;
-                }
-                g
-            })
+            .map(|(chunk, (pairs, _))| update_chunk(chunk, pairs, big_l, p_d))
             .collect()
     }
 
@@ -494,63 +454,264 @@ impl SmcPhd {
 
     /// Resamples the persistent particles to ρ N̂; each newborn group, updated by its own
     /// measurement only, is resampled to J_b particles and joins them (Ristic et al. 2012).
+    /// `expected_targets` is the persistent particles' total weight.
     fn resample_particles(
         &mut self,
         expected_targets: f64,
-        newborn: Vec<Vec<Particle>>,
+        newborn: &Newborn,
         likelihoods: &Likelihoods,
     ) {
         let cfg = self.config;
-        let persistent = std::mem::take(&mut self.particles);
+        let per_group = cfg.birth_particles;
         let target = (expected_targets * cfg.particles_per_target as f64).ceil() as usize;
         let target = target.min(cfg.max_particles);
-        // One allocation for the persistent and every newborn group's particles (growing the
-        // vector group by group took about a quarter of this thread's share of a frame).
-        let mut out = Vec::with_capacity(target + newborn.len() * cfg.birth_particles);
-        resample_into(&persistent, target, &mut self.rng, &mut out);
-        let mut weighted: Vec<Particle> = Vec::with_capacity(cfg.birth_particles);
+        // The persistent and every newborn group's particles go into one vector, reserved
+        // once (growing it group by group took about a quarter of this thread's share of a
+        // frame), and that vector is the last frame's, reused: a frame allocates no vector
+        // of particles (on the realistic files, half the bytes the PHD tracker allocated).
+        let persistent = std::mem::take(&mut self.particles);
+        let mut out = std::mem::take(&mut self.spare);
+        out.clear();
+        out.reserve(target + newborn.particles.len());
+        resample_into(
+            &persistent,
+            expected_targets,
+            target,
+            &mut self.rng,
+            &mut out,
+        );
+        let mut weighted: Vec<Particle> = Vec::with_capacity(per_group);
         for ((group, g), l) in newborn
-            .into_iter()
-            .zip(&likelihoods.newborn)
+            .particles
+            .chunks(per_group)
+            .zip(newborn.density.chunks(per_group))
             .zip(&likelihoods.normaliser)
         {
             weighted.clear();
-            weighted.extend(group.into_iter().zip(g).map(|(p, d)| Particle {
+            weighted.extend(group.iter().zip(g).map(|(p, d)| Particle {
                 w: p.w * d / l,
-                ..p
+                ..*p
             }));
-            resample_into(&weighted, cfg.birth_particles, &mut self.rng, &mut out);
+            let total = weighted.iter().map(|p| p.w).sum();
+            resample_into(&weighted, total, per_group, &mut self.rng, &mut out);
         }
         self.particles = out;
+        self.spare = persistent;
     }
 }
 
-/// Systematic resampling of `particles` to `n` particles of equal weight (their total),
-/// appended to `out`; an empty or weightless set adds nothing.
+/// The newborn groups of a frame, `J_b` particles per measurement drawn around it (group j
+/// from stream j of `seed`, label `first_label + j`), each of total weight `nu`, and their
+/// likelihoods under their own measurement.
+fn spawn_newborn(
+    cfg: &PhdConfig,
+    lik: &Likelihood,
+    zs: &[BoxMeasurement],
+    nu: f64,
+    seed: u64,
+    first_label: u64,
+) -> Newborn {
+    let per_group = cfg.birth_particles;
+    let blank = Particle {
+        x: [0.0; 6],
+        w: 0.0,
+        label: 0,
+    };
+    let mut newborn = Newborn {
+        particles: vec![blank; zs.len() * per_group],
+        density: vec![0.0; zs.len() * per_group],
+    };
+    newborn
+        .particles
+        .par_chunks_mut(per_group)
+        .zip(newborn.density.par_chunks_mut(per_group))
+        .zip(zs)
+        .enumerate()
+        .for_each(|(j, ((group, density), z))| {
+            let mut rng = stream_rng(seed, j);
+            for (p, d) in group.iter_mut().zip(density) {
+                let mut x = [0.0; 6];
+                for k in 0..4 {
+                    x[k] = z[k] + cfg.measurement_std[k] * normal(&mut rng);
+                }
+                x[2] = x[2].max(1.0);
+                x[3] = x[3].max(1.0);
+                if let Motion::ConstantVelocity { .. } = cfg.motion {
+                    x[4] = cfg.birth_velocity_std * normal(&mut rng);
+                    x[5] = cfg.birth_velocity_std * normal(&mut rng);
+                }
+                *p = Particle {
+                    x,
+                    w: nu / per_group as f64,
+                    label: first_label + j as u64,
+                };
+                *d = lik.density(z, &x);
+            }
+        });
+    newborn
+}
+
+/// Moves one chunk of persistent particles by `frames` frames with the chunk's own
+/// generator, and weights them by `survive`.
+fn predict_chunk(
+    chunk: &mut [Particle],
+    motion: &Motion,
+    frames: u64,
+    survive: f64,
+    mut rng: ChaCha8Rng,
+) {
+    for p in chunk {
+        propagate_by(&mut p.x, motion, frames, &mut rng);
+        p.w *= survive;
+    }
+}
+
+/// The non-zero g(z|x) of one chunk of persistent particles, in particle order and, per
+/// particle, in increasing c_x of z, and per measurement Σ p_D g w.
+fn chunk_densities(
+    chunk: &[Particle],
+    sorted: &SortedByX,
+    lik: &Likelihood,
+    p_d: f64,
+) -> ChunkDensities {
+    let mut sums = vec![0.0; sorted.zs.len()];
+    // About one measurement within reach per particle: room for that up front.
+    let mut pairs = Vec::with_capacity(chunk.len());
+    let zs = &sorted.zs[..];
+    let mut start = 0;
+    for (i, p) in chunk.iter().enumerate() {
+        let x = p.x[0];
+        start = sorted.first_within(x, start);
+        let hi = x + sorted.reach;
+        // The measurements with c_x in [x − reach, x + reach], in increasing c_x.
+        let mut k = start;
+        while k < zs.len() && zs[k][0] <= hi {
+            let d = lik.density(&zs[k], &p.x);
+            if d > 0.0 {
+                let j = sorted.index[k];
+                sums[j as usize] += p_d * d * p.w;
+                pairs.push((i as u32, j, d));
+            }
+            k += 1;
+        }
+    }
+    (pairs, sums)
+}
+
+/// The update of one chunk of persistent particles, w ← [1 − p_D + Σ_z p_D g(z|x) / L(z)] w,
+/// and its grouping sums per measurement.
+fn update_chunk(
+    chunk: &mut [Particle],
+    pairs: &[(u32, u32, f64)],
+    big_l: &[f64],
+    p_d: f64,
+) -> Grouping {
+    let n_z = big_l.len();
+    let mut g = Grouping {
+        mass: vec![0.0; n_z],
+        mean: vec![[0.0; 6]; n_z],
+        labels: vec![Vec::new(); n_z],
+    };
+    let mut factor = vec![1.0 - p_d; chunk.len()];
+    for &(i, j, d) in pairs {
+        let (i, j) = (i as usize, j as usize);
+        let p = &chunk[i];
+        let share = p_d * d / big_l[j];
+        factor[i] += share;
+        let m = share * p.w;
+        g.mass[j] += m;
+        for k in 0..6 {
+            g.mean[j][k] += m * p.x[k];
+        }
+        // Particles of one target are mostly adjacent: extend the last run.
+        match g.labels[j].last_mut() {
+            Some((l, acc)) if *l == p.label => *acc += m,
+            _ => g.labels[j].push((p.label, m)),
+        }
+    }
+    for (p, f) in chunk.iter_mut().zip(factor) {
+        p.w *= f;
+    }
+    g
+}
+
+/// Systematic resampling of `particles`, of total weight `total`, to `n` particles of equal
+/// weight (their total), appended to `out`; an empty or weightless set adds nothing.
 fn resample_into<R: Rng + ?Sized>(
     particles: &[Particle],
+    total: f64,
     n: usize,
     rng: &mut R,
     out: &mut Vec<Particle>,
 ) {
-    let total: f64 = particles.iter().map(|p| p.w).sum();
     if !(total.is_finite() && total > 1e-12) || n == 0 {
         return;
     }
     let step = total / n as f64;
     let mut u = rng.random::<f64>() * step;
-    let start = out.len();
-    let end = start + n;
+    let mut left = n;
     let mut acc = 0.0;
     for p in particles {
         acc += p.w;
-        while u < acc && out.len() < end {
+        while u < acc && left > 0 {
             out.push(Particle { w: step, ..*p });
             u += step;
+            left -= 1;
         }
     }
     // Rounding can leave the last slots unfilled; they go to the last particle.
     if let Some(last) = particles.last() {
-        out.resize(end, Particle { w: step, ..*last });
+        out.extend(std::iter::repeat_n(Particle { w: step, ..*last }, left));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The measurements a particle visits (from `first_within`, moved on from any previous
+    /// answer) are exactly those whose c_x lies in [x − reach, x + reach], by brute force over
+    /// all of them, in increasing c_x; none for a NaN x.
+    #[test]
+    fn a_particle_visits_exactly_the_measurements_in_reach_from_any_start() {
+        // Unsorted, with repeated, negative and far-apart centres.
+        let xs = [7.0, -40.0, 0.0, 31.0, 2.5, 0.0, 90.0, -3.0, 7.0, 30.0];
+        let zs: Vec<BoxMeasurement> = xs.iter().map(|&x| [x, 1.0, 10.0, 20.0]).collect();
+        let reach = 5.0;
+        let sorted = SortedByX::new(&zs, reach);
+        let particles = [
+            -100.0,
+            -45.0,
+            -35.0,
+            -3.0,
+            0.0,
+            2.0,
+            2.5,
+            4.5,
+            12.0,
+            25.0,
+            33.0,
+            85.0,
+            95.0,
+            200.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ];
+        for &x in &particles {
+            let mut expected: Vec<(f64, u32)> = (0..zs.len())
+                .filter(|&j| zs[j][0] >= x - reach && zs[j][0] <= x + reach)
+                .map(|j| (zs[j][0], j as u32))
+                .collect();
+            expected.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            for from in 0..=zs.len() + 2 {
+                let start = sorted.first_within(x, from);
+                let visited: Vec<(f64, u32)> = (start..zs.len())
+                    .take_while(|&k| sorted.zs[k][0] <= x + reach)
+                    .map(|k| (sorted.zs[k][0], sorted.index[k]))
+                    .collect();
+                assert_eq!(visited, expected, "x = {x}, from = {from}");
+            }
+        }
     }
 }

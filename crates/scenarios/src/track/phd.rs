@@ -190,20 +190,29 @@ pub(super) fn track_boxes_phd(
         *live = kept;
         Ok(())
     };
-    for (&frame, boxes) in &by_frame {
-        let frames = match previous {
-            Some(prev) => {
-                let frames = u64::from(frame) - u64::from(prev);
-                if frames > 1 {
-                    coast_through_gap(prev, frames - 1, &phd, &mut live, &mut done, settings)?;
+    // The frames run on a thread of rayon's pool, so that the filter's parallel passes fork
+    // from inside the pool. Called from outside it, each pass was handed to the pool and
+    // waited for, a sleep and a wake-up of this thread per pass, which cost more than the
+    // second thread saved: on the realistic files of `mot-realistic` the PHD tracker took
+    // about 0.21 ms per frame that way and 0.15 this way (2 threads, load ≈ 3). The output is
+    // the same either way: no result depends on the threads.
+    rayon::scope(|_| -> Result<()> {
+        for (&frame, boxes) in &by_frame {
+            let frames = match previous {
+                Some(prev) => {
+                    let frames = u64::from(frame) - u64::from(prev);
+                    if frames > 1 {
+                        coast_through_gap(prev, frames - 1, &phd, &mut live, &mut done, settings)?;
+                    }
+                    frames
                 }
-                frames
-            }
-            None => 1,
-        };
-        step_frame(frame, frames, boxes, &mut phd, &mut live, &mut done)?;
-        previous = Some(frame);
-    }
+                None => 1,
+            };
+            step_frame(frame, frames, boxes, &mut phd, &mut live, &mut done)?;
+            previous = Some(frame);
+        }
+        Ok(())
+    })?;
     done.extend(live.into_iter().filter(|t| t.id.is_some()));
     let mut tracks = Vec::with_capacity(done.len());
     for mut t in done {
@@ -247,11 +256,19 @@ impl LabelMasses {
     /// (which took about a sixth of the PHD tracker's instructions).
     fn of(phd: &SmcPhd) -> Self {
         let mut runs: Vec<(u64, f64)> = Vec::new();
-        for p in phd.particles() {
-            match runs.last_mut() {
-                Some(r) if r.0 == p.label => r.1 += p.w,
-                _ => runs.push((p.label, p.w)),
+        let mut particles = phd.particles().iter();
+        if let Some(first) = particles.next() {
+            // The current run in locals, pushed when the label changes.
+            let (mut label, mut mass) = (first.label, first.w);
+            for p in particles {
+                if p.label == label {
+                    mass += p.w;
+                } else {
+                    runs.push((label, mass));
+                    (label, mass) = (p.label, p.w);
+                }
             }
+            runs.push((label, mass));
         }
         // Stable: the runs of one label are summed in particle order.
         runs.sort_by_key(|r| r.0);
