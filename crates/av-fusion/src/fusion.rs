@@ -203,7 +203,8 @@ pub struct PeakMeasurement {
     pub position: Vec2,
     /// Second central moment of the shape plus s²/12 per axis (symmetric positive definite).
     pub covariance: Matrix2<f64>,
-    /// The fused grid's value at the peak cell.
+    /// The fused grid's value at the peak cell (for a peak found by explaining away, at the
+    /// cell of its position: the residual only finds it).
     pub value: f64,
 }
 
@@ -345,7 +346,14 @@ fn explain_away(
                     .is_some_and(|(c, r)| fused.value(c, r) >= pc.relative_threshold * top)
         });
         match next {
-            Some(q) => kept.push(q),
+            // The value is the fused grid's, not the residual's: the residual is renormalised
+            // after each notch, which would lift a weak later peak to a strong one's height.
+            Some(q) => kept.push(PeakMeasurement {
+                value: fused
+                    .cell_of(&q.position)
+                    .map_or(q.value, |(c, r)| fused.value(c, r)),
+                ..q
+            }),
             None => break,
         }
     }

@@ -504,8 +504,10 @@ fn peak_scores_look_up_their_bin_and_reject_bad_tables() {
         (3.0, 3.0),
         (100.0, 3.0),
     ] {
-        assert_eq!(table.log_ratio(c).to_bits(), want.to_bits(), "contrast {c}");
+        let got = table.log_ratio(c).expect("valid");
+        assert_eq!(got.to_bits(), want.to_bits(), "contrast {c}");
     }
+    assert!(table.log_ratio(f64::NAN).is_err());
     let bad = [
         PeakScores {
             contrast_edges: vec![1.0, 3.0],
@@ -522,6 +524,7 @@ fn peak_scores_look_up_their_bin_and_reject_bad_tables() {
     ];
     for table in bad {
         assert!(table.check().is_err(), "{table:?}");
+        assert!(table.log_ratio(1.0).is_err(), "{table:?}");
         let mut config = av_config(FusionRule::Product { floor: 0.05 });
         config.tracker.peak_scores = Some(table);
         assert!(AvPipeline::new(road_sensors(), &config).is_err());
@@ -546,6 +549,30 @@ fn peak_scores_reach_the_tracker() {
     assert_eq!(run(Some(0.0)).tracks, plain.tracks);
     // Every peak e⁻⁵⁰ times likelier to be clutter than a vehicle: no track is worth it.
     assert!(run(Some(-50.0)).tracks.is_empty());
+    // The contrast is the peak's value over the grid's mean (the grid sums to 1): an edge
+    // just below the weakest peak's contrast puts every peak in the upper bin (ratio 0, the
+    // plain output), an edge just above the strongest's puts every peak in the lower (−50).
+    let contrasts: Vec<f64> = plain
+        .scans
+        .iter()
+        .flat_map(|s| {
+            let cells = s.grid.values().len() as f64;
+            s.peaks.iter().map(move |p| p.value * cells)
+        })
+        .collect();
+    let weakest = contrasts.iter().copied().fold(f64::INFINITY, f64::min);
+    let strongest = contrasts.iter().copied().fold(0.0, f64::max);
+    assert!(weakest > 1.0, "a peak stands above the grid's mean");
+    let with_edge = |edge: f64| {
+        let mut config = av_config(FusionRule::Product { floor: 0.05 });
+        config.tracker.peak_scores = Some(PeakScores {
+            contrast_edges: vec![edge],
+            log_ratios: vec![-50.0, 0.0],
+        });
+        track_reports(sensors.clone(), reports.clone(), 40, &config).expect("runs")
+    };
+    assert_eq!(with_edge(0.99 * weakest).tracks, plain.tracks);
+    assert!(with_edge(1.01 * strongest).tracks.is_empty());
 }
 
 #[test]

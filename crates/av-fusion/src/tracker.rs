@@ -73,10 +73,18 @@ impl PeakScores {
         Ok(())
     }
 
-    /// ln f₁(c)/f₀(c) of a peak of contrast `contrast`.
-    pub fn log_ratio(&self, contrast: f64) -> f64 {
+    /// ln f₁(c)/f₀(c) of a peak of contrast `contrast` (the table is checked first; a
+    /// non-finite contrast is an error).
+    pub fn log_ratio(&self, contrast: f64) -> Result<f64> {
+        self.check()?;
+        if !contrast.is_finite() {
+            return Err(invalid("contrast", format!("{contrast} is not finite")));
+        }
         let bin = self.contrast_edges.partition_point(|&e| e <= contrast);
-        self.log_ratios[bin]
+        self.log_ratios
+            .get(bin)
+            .copied()
+            .ok_or_else(|| invalid("log_ratios", "shorter than the edges"))
     }
 }
 
@@ -180,7 +188,7 @@ impl AvPipeline {
                     .peaks
                     .iter()
                     .map(|p| scores.log_ratio(p.value * cells))
-                    .collect();
+                    .collect::<Result<_>>()?;
                 self.tracker.push_scan_scored(frame, &points, &ratios)?
             }
         };

@@ -741,14 +741,23 @@ impl Pipeline for AvFusion {
             "pass durations must be > 0"
         );
         let keys: Vec<String> = (0..APPROACHES.len()).map(settings_key).collect();
-        for k in p.multi_peak_scores.keys() {
+        for (k, table) in &p.multi_peak_scores {
             ensure!(
                 keys.contains(k),
                 "[params.multi_peak_scores]: unknown approach {k} (one of {})",
                 keys.join(", ")
             );
+            table
+                .check()
+                .map_err(|e| anyhow::anyhow!("[params.multi_peak_scores.{k}]: {e}"))?;
         }
         for a in 0..APPROACHES.len() {
+            // The tables are learnt on multi-vehicle runs, for those runs only.
+            ensure!(
+                !p.settings.get(a).scored,
+                "[params.settings.{}]: scored is for the multi-vehicle settings only",
+                settings_key(a)
+            );
             for multi in [false, true] {
                 let s = settings_of(p, a, multi);
                 av_config(p, a, s, peak_scores_of(p, a, s)?)?.check()?;
@@ -887,12 +896,15 @@ impl Pipeline for AvFusion {
                     && significant(fusion_gain(out, 5, Modalities::Video)),
             ),
             Claim::new(
-                "the issue's MOTA ≥ 0.8 is not met: under neither rule does audio+video reach it \
-                 on every multi-vehicle run",
-                !out.multi.is_empty()
-                    && [2usize, 5]
-                        .iter()
-                        .all(|&a| out.multi.iter().any(|(_, mota, _)| mota[a] < 0.8)),
+                "the issue's MOTA ≥ 0.8 is met under the product rule: audio+video reaches it on \
+                 every multi-vehicle run (on this seed; the tuning seeds' runs are in \
+                 docs/av-fusion.md, two of nine below 0.8)",
+                !out.multi.is_empty() && out.multi.iter().all(|(_, mota, _)| mota[5] >= 0.8),
+            ),
+            Claim::new(
+                "under the weighted sum audio+video does not reach MOTA 0.8 on every \
+                 multi-vehicle run",
+                out.multi.iter().any(|(_, mota, _)| mota[2] < 0.8),
             ),
         ];
         if let (Some(first), Some(last)) = (out.sweep.first(), out.sweep.last())
@@ -1192,10 +1204,10 @@ impl Pipeline for AvFusion {
                 .filter(|(_, (_, mota, _))| pick(mota[a], mota[b]))
                 .map(|(r, _)| (r + 1).to_string())
                 .collect();
-            if runs.is_empty() {
-                format!("under the {rule} rule, on no run")
-            } else {
-                format!("under the {rule} rule, on runs {}", runs.join(", "))
+            match runs.len() {
+                0 => format!("under the {rule} rule, on no run"),
+                1 => format!("under the {rule} rule, on run {}", runs[0]),
+                _ => format!("under the {rule} rule, on runs {}", runs.join(", ")),
             }
         };
         // Audio+video below the issue's MOTA 0.8, and audio alone ahead of it.
@@ -1247,12 +1259,11 @@ impl Pipeline for AvFusion {
                  small weight and fusion improves on audio by centimetres, not metres. With two and \
                  three vehicles the runs use each approach's own multi-vehicle settings (lobe \
                  equalisation of the profiles, own exponents, κ, MCMCDA rates, speed limit and \
-                 largest gap, and the peaks' contrasts as MCMCDA detection scores where that \
-                 helps, tuned by MOTA on the tuning seeds' multi-vehicle runs); the broad \
-                 audio beams still merge and a masked vehicle's peak is often missing: \
-                 audio+video MOTA is {} (sum) and {} (product) over the three runs, short of 0.8 \
-                 {} (table below). Audio alone has a higher MOTA than \
-                 audio+video {}.",
+                 largest gap, and the peaks' contrasts as MCMCDA detection scores where the \
+                 tuning search chose them, all tuned by MOTA on the tuning seeds' multi-vehicle \
+                 runs); the broad audio beams still merge and a masked vehicle's peak is often \
+                 missing: audio+video MOTA is {} (sum) and {} (product) over the {} runs, short \
+                 of 0.8 {} (table below). Audio alone has a higher MOTA than audio+video {}.",
                 fmt_num(out.calibration_error_deg),
                 fmt_num(out.audio_calibration_error_deg),
                 av(2),
@@ -1266,6 +1277,7 @@ impl Pipeline for AvFusion {
                 audio_wins.join("; "),
                 motas(2),
                 motas(5),
+                out.multi.len(),
                 short_of_target.join("; "),
                 audio_wins_multi.join("; "),
             ),

@@ -413,7 +413,10 @@ pub(super) fn tune(p: &Params, runs: &[RunSpec]) -> Result<String> {
 }
 
 /// Setting this environment variable (`all`, or approach indices) learns the peak-score tables
-/// of `[params.multi_peak_scores]` first and prints them as TOML.
+/// of `[params.multi_peak_scores]` first and prints them as TOML. The tables are fitted with
+/// the multi-vehicle settings as configured, and the search of `AV_FUSION_TUNE_MULTI` uses the
+/// tables as configured (not those just printed): fit, paste, search, paste, and fit again
+/// until neither moves.
 pub(super) const FIT_SCORES_ENV: &str = "AV_FUSION_FIT_SCORES";
 
 /// How the peak-score tables are learnt (`[params.score_fit]`).
@@ -448,7 +451,7 @@ pub(super) fn fit_peak_scores(p: &Params, runs: &[RunSpec], which: &str) -> Resu
     for &seed in &f.seeds {
         sims.extend(simulate_multi(p, runs, seed)?);
     }
-    for a in approaches_in(which) {
+    for a in approaches_in(which)? {
         let mut s = *p.multi_settings.get(a);
         s.max_peaks = Some(f.max_peaks);
         s.scored = false;
@@ -474,43 +477,16 @@ pub(super) fn fit_peak_scores(p: &Params, runs: &[RunSpec], which: &str) -> Resu
             })
             .collect::<Result<_>>()?;
         let peaks: Vec<(f64, bool)> = labelled.into_iter().flatten().collect();
-        let mut sorted: Vec<f64> = peaks.iter().map(|x| x.0).collect();
-        sorted.sort_by(f64::total_cmp);
-        ensure!(!sorted.is_empty(), "no peaks to learn scores from");
-        let mut edges: Vec<f64> = (1..f.bins)
-            .map(|i| sorted[i * sorted.len() / f.bins])
-            .collect();
-        edges.dedup();
-        let mut counts = vec![[0usize; 2]; edges.len() + 1];
-        for &(c, near) in &peaks {
-            counts[edges.partition_point(|&e| e <= c)][usize::from(near)] += 1;
-        }
+        let (table, counts) = score_table(&peaks, f.bins)?;
         let (far_n, near_n) = counts
             .iter()
             .fold((0, 0), |(f0, f1), c| (f0 + c[0], f1 + c[1]));
-        let b = counts.len() as f64;
-        let log_ratios: Vec<f64> = counts
-            .iter()
-            .map(|c| {
-                ((c[1] + 1) as f64 / (near_n as f64 + b)).ln()
-                    - ((c[0] + 1) as f64 / (far_n as f64 + b)).ln()
-            })
-            .collect();
-        let table = PeakScores {
-            contrast_edges: edges,
-            log_ratios,
-        };
-        table.check()?;
         eprintln!(
             "scores {} ({near_n} near, {far_n} far peaks; per bin far/near {counts:?}):",
             APPROACHES[a].0
         );
-        let fmt = |v: &[f64]| {
-            v.iter()
-                .map(|x| format!("{x:.3}"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
+        // Shortest round-trip form: the pasted table is the fitted one to the bit.
+        let fmt = |v: &[f64]| v.iter().map(f64::to_string).collect::<Vec<_>>().join(", ");
         eprintln!(
             "{} = {{ contrast_edges = [{}], log_ratios = [{}] }}",
             settings_key(a),
@@ -521,19 +497,66 @@ pub(super) fn fit_peak_scores(p: &Params, runs: &[RunSpec], which: &str) -> Resu
     Ok(())
 }
 
-/// The approaches named by a developer variable: comma-separated indices into
-/// `APPROACHES`, anything else all six.
-fn approaches_in(which: &str) -> Vec<usize> {
-    let order: Vec<usize> = which
-        .split(',')
-        .filter_map(|s| s.trim().parse().ok())
-        .filter(|&a: &usize| a < APPROACHES.len())
-        .collect();
-    if order.is_empty() {
-        (0..APPROACHES.len()).collect()
-    } else {
-        order
+/// The score table of labelled contrasts `peaks` ((contrast, near a vehicle)) in `bins` bins
+/// whose edges are the pooled contrasts' quantiles (equal edges merged and none at the
+/// smallest contrast, so fewer bins when many contrasts tie), each bin's ln f₁/f₀ the log of its share of the near peaks over its
+/// share of the far ones, each count plus one (Laplace). Also returns the counts per bin,
+/// \[far, near\].
+pub(super) fn score_table(
+    peaks: &[(f64, bool)],
+    bins: usize,
+) -> Result<(PeakScores, Vec<[usize; 2]>)> {
+    ensure!(bins >= 1, "a score table needs at least one bin");
+    ensure!(
+        peaks.iter().all(|p| p.0.is_finite()),
+        "a peak's contrast is not finite"
+    );
+    let mut sorted: Vec<f64> = peaks.iter().map(|p| p.0).collect();
+    sorted.sort_by(f64::total_cmp);
+    ensure!(!sorted.is_empty(), "no peaks to learn scores from");
+    let mut edges: Vec<f64> = (1..bins).map(|i| sorted[i * sorted.len() / bins]).collect();
+    edges.dedup();
+    // An edge at the smallest contrast would leave the bin below it empty.
+    edges.retain(|&e| e > sorted[0]);
+    let mut counts = vec![[0usize; 2]; edges.len() + 1];
+    for &(c, near) in peaks {
+        counts[edges.partition_point(|&e| e <= c)][usize::from(near)] += 1;
     }
+    let (far_n, near_n) = counts
+        .iter()
+        .fold((0, 0), |(f0, f1), c| (f0 + c[0], f1 + c[1]));
+    let b = counts.len() as f64;
+    let log_ratios = counts
+        .iter()
+        .map(|c| {
+            ((c[1] + 1) as f64 / (near_n as f64 + b)).ln()
+                - ((c[0] + 1) as f64 / (far_n as f64 + b)).ln()
+        })
+        .collect();
+    let table = PeakScores {
+        contrast_edges: edges,
+        log_ratios,
+    };
+    table.check()?;
+    Ok((table, counts))
+}
+
+/// The approaches named by a developer variable: `all`, or comma-separated indices into
+/// `APPROACHES`.
+fn approaches_in(which: &str) -> Result<Vec<usize>> {
+    if which.trim() == "all" {
+        return Ok((0..APPROACHES.len()).collect());
+    }
+    which
+        .split(',')
+        .map(|s| match s.trim().parse::<usize>() {
+            Ok(a) if a < APPROACHES.len() => Ok(a),
+            _ => anyhow::bail!(
+                "{s:?} is not `all` or an approach index 0..{}",
+                APPROACHES.len()
+            ),
+        })
+        .collect()
 }
 
 /// From `start`, one coordinate at a time over its candidates (the others held), keeping a
@@ -602,7 +625,7 @@ pub(super) fn lobes_with(
     reason = "the search takes minutes: each line goes to the terminal as it is measured"
 )]
 pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()> {
-    let order = approaches_in(which);
+    let order = approaches_in(which)?;
     let t = &p.multi_tuning;
     let mut sims = Vec::new();
     for &seed in &t.seeds {
@@ -789,4 +812,44 @@ fn simulate_multi(p: &Params, runs: &[RunSpec], seed: u64) -> Result<Vec<Simulat
             simulate_run(p, run, &mut rng)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn score_table_by_hand() {
+        // Contrasts 1..=6, the three largest near a vehicle; two bins split at the 3rd of
+        // 6 sorted values (index 3: contrast 4): bin 0 = {1, 2, 3} all far, bin 1 = {4, 5, 6}
+        // all near. With Laplace counts: near shares 1/5 and 4/5, far shares 4/5 and 1/5,
+        // so ln f₁/f₀ = ln(1/4) and ln 4.
+        let peaks: Vec<(f64, bool)> = (1..=6).map(|c| (f64::from(c), c > 3)).collect();
+        let (table, counts) = score_table(&peaks, 2).expect("fits");
+        assert_eq!(table.contrast_edges, vec![4.0]);
+        assert_eq!(counts, vec![[3, 0], [0, 3]]);
+        let want = [0.25f64.ln(), 4f64.ln()];
+        for (got, want) in table.log_ratios.iter().zip(want) {
+            assert!((got - want).abs() < 1e-12, "{got} against {want}");
+        }
+        // Ties merge edges: six equal contrasts leave one bin.
+        let flat: Vec<(f64, bool)> = (0..6).map(|i| (2.0, i % 2 == 0)).collect();
+        let (table, _) = score_table(&flat, 3).expect("fits");
+        assert!(table.contrast_edges.is_empty());
+        assert_eq!(table.log_ratios.len(), 1);
+        assert!(score_table(&[], 3).is_err());
+        assert!(score_table(&[(f64::NAN, true)], 3).is_err());
+    }
+
+    #[test]
+    fn approaches_are_all_or_valid_indices() {
+        assert_eq!(
+            approaches_in("all").expect("all"),
+            (0..6).collect::<Vec<_>>()
+        );
+        assert_eq!(approaches_in("5, 2").expect("list"), vec![5, 2]);
+        assert!(approaches_in("6").is_err());
+        assert!(approaches_in("1,x").is_err());
+        assert!(approaches_in("").is_err());
+    }
 }
