@@ -729,6 +729,19 @@ fn explaining_away_finds_the_second_target_with_the_first_removed() {
         "errors {e1} m, {e2} m: {:?}",
         fused.peaks
     );
+    // The second peak's value is the fused grid's at its cell (about 0.4³ of the first's),
+    // not the renormalised residual's, where it would be the residual's maximum.
+    let (col, row) = fused
+        .grid
+        .cell_of(&fused.peaks[1].position)
+        .expect("inside");
+    let on_grid = fused.grid.value(col, row);
+    assert_eq!(fused.peaks[1].value.to_bits(), on_grid.to_bits());
+    assert!(
+        fused.peaks[1].value < 0.5 * fused.peaks[0].value,
+        "{:?}",
+        fused.peaks
+    );
     config.peaks.explain_away_deg = -1.0;
     assert!(config.check().is_err());
 }

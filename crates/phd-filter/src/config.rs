@@ -155,7 +155,8 @@ pub struct PhdConfig {
     pub birth_velocity_std: f64,
     /// SMC: particles per expected target (ρ).
     pub particles_per_target: usize,
-    /// SMC: particles drawn for each measurement's newborn group (J_b).
+    /// SMC: particles drawn for each measurement's newborn group (J_b), at most
+    /// `max_particles` (a frame's newborns are allocated as one block of measurements × J_b).
     pub birth_particles: usize,
     /// SMC: the most persistent particles after resampling.
     pub max_particles: usize,
@@ -288,6 +289,15 @@ impl PhdConfig {
                     reason: "0 particles; it must be at least 1".into(),
                 });
             }
+        }
+        if self.birth_particles > self.max_particles {
+            return Err(Error::InvalidParameter {
+                name: "birth_particles",
+                reason: format!(
+                    "{} exceeds max_particles = {}",
+                    self.birth_particles, self.max_particles
+                ),
+            });
         }
         ensure_positive(self.extraction_threshold, "extraction_threshold")?;
         ensure_in_range(self.label_min_share, 0.0, 1.0, "label_min_share")?;

@@ -281,6 +281,10 @@ fn degenerate_input_is_skipped_not_a_panic() {
             birth_particles: 0,
             ..PhdConfig::default()
         },
+        PhdConfig {
+            birth_particles: usize::MAX,
+            ..PhdConfig::default()
+        },
     ] {
         assert!(SmcPhd::new(bad, 0).is_err());
         assert!(GmPhd::new(bad, GmConfig::default()).is_err());

@@ -757,7 +757,7 @@ pub(super) fn diagnose(p: &Params, runs: &[RunSpec], seeds: &str) -> Result<()> 
     {
         let sims = simulate_multi(p, runs, seed)?;
         for (r, sim) in sims.iter().enumerate() {
-            for a in [0usize, 2, 3, 5] {
+            for (a, (name, _, _)) in APPROACHES.iter().enumerate() {
                 let s = score(p, sim, nominal(p), a)?;
                 let c = &s.clear;
                 let mut per_vehicle = Vec::new();
@@ -779,7 +779,7 @@ pub(super) fn diagnose(p: &Params, runs: &[RunSpec], seeds: &str) -> Result<()> 
                 let (_, _, false_peaks, ticks) = peak_counts(sim, &s.result);
                 eprintln!(
                     "seed {seed} run {r} {}: MOTA {:.3} OSPA {:.2} | TP {} FN {} FP {} IDSW {} frag {} | tracks {} | peaks near vehicle {} | false peaks {}/{} ticks",
-                    APPROACHES[a].0,
+                    name,
                     c.mota,
                     s.ospa,
                     c.true_positives,
