@@ -112,7 +112,8 @@ pub struct PeakExtraction {
     /// some sensors leave one broad maximum in the fused grid; once the first is explained
     /// away, the sensors that do separate them carry the second (the successive cancellation
     /// of CLEAN-like multi-source localisation, our choice; the paper's extraction is not
-    /// known to us). Its shape, and so its position and covariance, come from the residual.
+    /// known to us). Its shape, and so its position and covariance, come from the residual; its
+    /// value is the fused grid's (see [`PeakMeasurement::value`]).
     #[serde(default)]
     pub explain_away_deg: f64,
 }
