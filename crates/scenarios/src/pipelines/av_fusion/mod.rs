@@ -740,6 +740,18 @@ impl Pipeline for AvFusion {
             p.passes.iter().all(|s| s.duration_s > 0.0),
             "pass durations must be > 0"
         );
+        // Everything chosen or learnt on seeds is chosen on seeds other than the reported one.
+        for (what, seeds) in [
+            ("[params.tuning]", &p.tuning.seeds),
+            ("[params.multi_tuning]", &p.multi_tuning.seeds),
+            ("[params.score_fit]", &p.score_fit.seeds),
+        ] {
+            ensure!(
+                !seeds.contains(&env.seed),
+                "{what}: the seeds hold the reported seed {}",
+                env.seed
+            );
+        }
         let keys: Vec<String> = (0..APPROACHES.len()).map(settings_key).collect();
         for (k, table) in &p.multi_peak_scores {
             ensure!(
@@ -1322,4 +1334,62 @@ fn significant(gain: Option<(f64, f64)>) -> bool {
 fn average(values: &[Option<f64>]) -> Option<f64> {
     let found: Vec<f64> = values.iter().flatten().copied().collect();
     (!found.is_empty()).then(|| found.iter().sum::<f64>() / found.len() as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{NoClock, NoInputs, NoProgress};
+
+    /// The committed scenario's parameters.
+    fn committed() -> Params {
+        let text = include_str!("../../../../../fixtures/scenarios/av-fusion-road.toml");
+        let table: toml::Table = toml::from_str(text).expect("the scenario parses");
+        table["params"]
+            .clone()
+            .try_into()
+            .expect("its parameters parse")
+    }
+
+    /// `compute`'s checks, which run before anything is simulated.
+    fn checked(p: &Params, seed: u64) -> Result<()> {
+        let env = Env {
+            seed,
+            ..Env::new(&NoProgress, &NoInputs, &NoClock)
+        };
+        AvFusion::compute(p, &mut ChaCha8Rng::seed_from_u64(seed), &env).map(|_| ())
+    }
+
+    #[test]
+    fn bad_score_settings_and_reused_seeds_are_rejected_before_any_run() {
+        let good = committed();
+        // A malformed table, even of an unscored approach.
+        let mut p = good.clone();
+        let table = p
+            .multi_peak_scores
+            .get_mut("audio_video_sum")
+            .expect("the table exists");
+        table.log_ratios.pop();
+        let err = checked(&p, 1801).expect_err("short table").to_string();
+        assert!(err.contains("multi_peak_scores.audio_video_sum"), "{err}");
+        // An unknown approach.
+        let mut p = good.clone();
+        let any = p
+            .multi_peak_scores
+            .values()
+            .next()
+            .expect("a table")
+            .clone();
+        p.multi_peak_scores.insert("audio_and_video".into(), any);
+        let err = checked(&p, 1801).expect_err("unknown key").to_string();
+        assert!(err.contains("unknown approach"), "{err}");
+        // Scores in the single-vehicle settings.
+        let mut p = good.clone();
+        p.settings.get_mut(5).scored = true;
+        let err = checked(&p, 1801).expect_err("scored single").to_string();
+        assert!(err.contains("multi-vehicle settings only"), "{err}");
+        // The reported seed among the tuning seeds.
+        let err = checked(&good, 2).expect_err("seed 2 tunes").to_string();
+        assert!(err.contains("reported seed 2"), "{err}");
+    }
 }
