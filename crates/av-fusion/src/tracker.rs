@@ -77,6 +77,12 @@ impl PeakScores {
     /// non-finite contrast is an error).
     pub fn log_ratio(&self, contrast: f64) -> Result<f64> {
         self.check()?;
+        self.checked_log_ratio(contrast)
+    }
+
+    /// [`Self::log_ratio`] for a table already checked (the pipeline checks it once, at
+    /// construction, not for every peak).
+    fn checked_log_ratio(&self, contrast: f64) -> Result<f64> {
         if !contrast.is_finite() {
             return Err(invalid("contrast", format!("{contrast} is not finite")));
         }
@@ -187,7 +193,7 @@ impl AvPipeline {
                 let ratios: Vec<f64> = scan
                     .peaks
                     .iter()
-                    .map(|p| scores.log_ratio(p.value * cells))
+                    .map(|p| scores.checked_log_ratio(p.value * cells))
                     .collect::<Result<_>>()?;
                 self.tracker.push_scan_scored(frame, &points, &ratios)?
             }

@@ -478,9 +478,7 @@ pub(super) fn fit_peak_scores(p: &Params, runs: &[RunSpec], which: &str) -> Resu
             .collect::<Result<_>>()?;
         let peaks: Vec<(f64, bool)> = labelled.into_iter().flatten().collect();
         let (table, counts) = score_table(&peaks, f.bins)?;
-        let (far_n, near_n) = counts
-            .iter()
-            .fold((0, 0), |(f0, f1), c| (f0 + c[0], f1 + c[1]));
+        let [far_n, near_n] = totals(&counts);
         eprintln!(
             "scores {} ({near_n} near, {far_n} far peaks; per bin far/near {counts:?}):",
             APPROACHES[a].0
@@ -522,9 +520,7 @@ pub(super) fn score_table(
     for &(c, near) in peaks {
         counts[edges.partition_point(|&e| e <= c)][usize::from(near)] += 1;
     }
-    let (far_n, near_n) = counts
-        .iter()
-        .fold((0, 0), |(f0, f1), c| (f0 + c[0], f1 + c[1]));
+    let [far_n, near_n] = totals(&counts);
     let b = counts.len() as f64;
     let log_ratios = counts
         .iter()
@@ -539,6 +535,13 @@ pub(super) fn score_table(
     };
     table.check()?;
     Ok((table, counts))
+}
+
+/// The far and near peaks over all bins of per-bin \[far, near\] counts.
+fn totals(counts: &[[usize; 2]]) -> [usize; 2] {
+    counts
+        .iter()
+        .fold([0, 0], |[f0, f1], c| [f0 + c[0], f1 + c[1]])
 }
 
 /// The approaches named by a developer variable: `all`, or comma-separated indices into
