@@ -74,6 +74,11 @@ pub enum Error {
         /// Ratios given.
         scores: usize,
     },
+    /// A partition (MCMCDA's chain) of a problem built without neighbourhoods.
+    #[error(
+        "the problem keeps no neighbourhoods (Problem::without_neighbourhoods); MCMCDA needs them: build it with Problem::empty"
+    )]
+    NoNeighbourhoods,
     /// A whole-problem window was asked of a problem without scans.
     #[error("the problem holds no scans")]
     EmptyProblem,

@@ -66,6 +66,7 @@ mod config;
 mod error;
 mod estimates;
 mod nearest;
+mod neighbours;
 mod online;
 mod partition;
 mod problem;

@@ -50,6 +50,9 @@ impl<'a> Partition<'a> {
         problem: &'a Problem,
         window: RangeInclusive<usize>,
     ) -> Result<Self> {
+        if !problem.has_neighbourhoods() {
+            return Err(Error::NoNeighbourhoods);
+        }
         let (lo, hi) = check_window(problem, &window)?;
         let span = problem.id_span(lo..=hi).unwrap_or(0..0);
         let mut owner = vec![OUTSIDE; span.len()];

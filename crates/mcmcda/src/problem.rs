@@ -8,6 +8,7 @@ use tracker_model::{Frame, Scan, Vec2};
 
 use crate::config::Model;
 use crate::error::{Error, Result};
+use crate::neighbours::{Lists, NeighbourLists};
 
 /// A measurement's index in a [`Problem`], in arrival order.
 pub type MeasId = u32;
@@ -53,11 +54,13 @@ pub struct Problem {
     held: Vec<u32>,
     /// Members of each non-empty scan, in the order of `held`.
     members: Vec<Vec<MeasId>>,
-    /// forward[m·d̄ + d − 1] = L(y_m, t_m, d); backward likewise for scan t_m − d.
-    forward: Vec<Vec<MeasId>>,
-    backward: Vec<Vec<MeasId>>,
+    /// List d of slot m: L(y_m, t_m, d); backward likewise for scan t_m − d.
+    forward: NeighbourLists,
+    backward: NeighbourLists,
     /// Reused by [`Self::add_measurement`] (holds nothing between calls).
     scratch: Vec<MeasId>,
+    /// Whether the neighbourhoods are kept ([`Self::without_neighbourhoods`]: not).
+    linked: bool,
 }
 
 impl Problem {
@@ -76,10 +79,29 @@ impl Problem {
             n_scans: 0,
             held: Vec::new(),
             members: Vec::new(),
-            forward: Vec::new(),
-            backward: Vec::new(),
+            forward: NeighbourLists::new(model.max_gap() as usize),
+            backward: NeighbourLists::new(model.max_gap() as usize),
             scratch: Vec::new(),
+            linked: true,
         }
+    }
+
+    /// [`Self::empty`] for a problem that keeps the measurements by scan but not their
+    /// neighbourhoods: what the nearest-neighbour baseline ([`crate::nearest_neighbour_tracks`])
+    /// reads, without the cost of the lists, which grows with d̄² (every measurement of the d̄
+    /// scans on either side within reach of each measurement). [`Self::forward`] and
+    /// [`Self::backward`] are empty, and a [`crate::Partition`] of it (MCMCDA's chain, the
+    /// greedy start) fails with [`Error::NoNeighbourhoods`].
+    pub fn without_neighbourhoods(model: &Model, first_frame: Frame) -> Self {
+        Self {
+            linked: false,
+            ..Self::empty(model, first_frame)
+        }
+    }
+
+    /// Whether the neighbourhoods are kept (false for [`Self::without_neighbourhoods`]).
+    pub fn has_neighbourhoods(&self) -> bool {
+        self.linked
     }
 
     /// A problem holding `scans`, whose frames must be strictly increasing; frames missing
@@ -193,9 +215,27 @@ impl Problem {
         self.positions.push(position);
         self.log_score_ratios.push(0.0);
         self.scan_of.push(scan as u32);
+        self.forward.push_slot();
+        self.backward.push_slot();
+        if self.linked {
+            self.link(slot, scan, position);
+        }
+        // Where `scan` is (or goes) in `held`: the end of the earlier scans.
+        let at = self.held.partition_point(|&s| (s as usize) < scan);
+        if self.held.get(at) == Some(&(scan as u32)) {
+            self.members[at].push(id);
+        } else {
+            self.held.insert(at, scan as u32);
+            self.members.insert(at, vec![id]);
+        }
+        Ok(id)
+    }
+
+    /// Adds the measurement in `slot` (at `position` in scan `scan`, not yet among the scan's
+    /// members) to the neighbourhoods, its own and those of the measurements within reach.
+    fn link(&mut self, slot: usize, scan: usize, position: Vec2) {
+        let id = self.id_base + slot as MeasId;
         let d_bar = self.max_gap;
-        self.forward.extend((0..d_bar).map(|_| Vec::new()));
-        self.backward.extend((0..d_bar).map(|_| Vec::new()));
         // One reused buffer for the neighbours found at each gap (no allocation per gap). Only
         // the held (non-empty) scans within d̄ of `scan` are visited, found by two binary
         // searches, instead of looking up each of the 2 d̄ scan indices: the lists are the
@@ -206,38 +246,28 @@ impl Problem {
         for i in later {
             let d = self.held[i] as usize - scan;
             self.neighbours_in(i, position, d, &mut found);
-            self.forward[slot * d_bar + d - 1].extend_from_slice(&found);
+            self.forward.extend(slot, d, &found);
             for &other in &found {
                 let other = self.slot(other);
-                self.backward[other * d_bar + d - 1].push(id);
+                self.backward.push(other, d, id);
             }
         }
-        // Where `scan` is (or goes) in `held`: the end of the earlier scans.
         let at = self.held.partition_point(|&s| (s as usize) < scan);
         let earlier =
             self.held
                 .partition_point(|&s| (s as usize) < scan.saturating_sub(d_bar))..at;
-        for i in earlier {
+        // Latest scan first, so that the new measurement's lists are appended in increasing
+        // d (each list comes from one scan, so the order of the scans changes no list).
+        for i in earlier.rev() {
             let d = scan - self.held[i] as usize;
             self.neighbours_in(i, position, d, &mut found);
-            // The new measurement's own lists are filled in one go, not push by push.
-            self.backward[slot * d_bar + d - 1].extend_from_slice(&found);
+            self.backward.extend(slot, d, &found);
             for &other in &found {
                 let other = self.slot(other);
-                // Plain growth: a list holds the one to three neighbours a gate lets
-                // through, so reserving for the whole scan would cost memory quadratic in
-                // the scan size.
-                self.forward[other * d_bar + d - 1].push(id);
+                self.forward.push(other, d, id);
             }
         }
         self.scratch = found;
-        if self.held.get(at) == Some(&(scan as u32)) {
-            self.members[at].push(id);
-        } else {
-            self.held.insert(at, scan as u32);
-            self.members.insert(at, vec![id]);
-        }
-        Ok(id)
     }
 
     /// Forgets every scan before scan index `scan` (clamped to [`Self::n_scans`]) and its
@@ -289,17 +319,15 @@ impl Problem {
         // Late arrivals among the forgotten (ids above new_base): keep the slot, drop the rest.
         for &m in dropped.iter().flatten().filter(|&&m| m >= new_base) {
             let i = (m - self.id_base) as usize;
-            for d in 0..d_bar {
-                self.forward[i * d_bar + d] = Vec::new();
-                self.backward[i * d_bar + d] = Vec::new();
-            }
+            self.forward.clear_from(i, 1);
+            self.backward.clear_from(i, 1);
         }
         let n_drop = (new_base - self.id_base) as usize;
         self.positions.drain(..n_drop);
         self.log_score_ratios.drain(..n_drop);
         self.scan_of.drain(..n_drop);
-        self.forward.drain(..n_drop * d_bar);
-        self.backward.drain(..n_drop * d_bar);
+        self.forward.drain_front(n_drop);
+        self.backward.drain_front(n_drop);
         self.id_base = new_base;
         // Backward neighbourhoods reaching into the forgotten scans.
         let reach = self.members.len().min(
@@ -308,18 +336,15 @@ impl Problem {
         );
         for &m in self.members[..reach].iter().flatten() {
             let i = (m - self.id_base) as usize;
+            // Scan t − d is forgotten for every d > t − scan.
             let t = self.scan_of[i] as usize;
-            for d in 1..=d_bar {
-                if t < scan + d {
-                    self.backward[i * d_bar + d - 1] = Vec::new();
-                }
-            }
+            self.backward.clear_from(i, t + 1 - scan);
         }
         shrink(&mut self.positions);
         shrink(&mut self.log_score_ratios);
         shrink(&mut self.scan_of);
-        shrink(&mut self.forward);
-        shrink(&mut self.backward);
+        self.forward.shrink();
+        self.backward.shrink();
         shrink(&mut self.held);
         shrink(&mut self.members);
     }
@@ -511,7 +536,7 @@ impl Problem {
     /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
     #[track_caller]
     pub fn forward(&self, m: MeasId, d: usize) -> &[MeasId] {
-        &self.forward[self.slot(m) * self.max_gap + d - 1]
+        self.forward_lists(m).get(d)
     }
 
     /// The d̄ lists [`Self::forward`]`(m, d)`, d = 1..=d̄, at index d − 1 (one look-up of `m`
@@ -521,9 +546,8 @@ impl Problem {
     /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
     #[inline]
     #[track_caller]
-    pub(crate) fn forward_lists(&self, m: MeasId) -> &[Vec<MeasId>] {
-        let at = self.slot(m) * self.max_gap;
-        &self.forward[at..at + self.max_gap]
+    pub(crate) fn forward_lists(&self, m: MeasId) -> Lists<'_> {
+        self.forward.lists(self.slot(m))
     }
 
     /// The d̄ lists [`Self::backward`]`(m, d)`, d = 1..=d̄, at index d − 1.
@@ -532,9 +556,8 @@ impl Problem {
     /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
     #[inline]
     #[track_caller]
-    pub(crate) fn backward_lists(&self, m: MeasId) -> &[Vec<MeasId>] {
-        let at = self.slot(m) * self.max_gap;
-        &self.backward[at..at + self.max_gap]
+    pub(crate) fn backward_lists(&self, m: MeasId) -> Lists<'_> {
+        self.backward.lists(self.slot(m))
     }
 
     /// The measurements y' of scan t_m − d with y_m ∈ L(y', t_m − d, d) (none once scan
@@ -544,7 +567,7 @@ impl Problem {
     /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
     #[track_caller]
     pub fn backward(&self, m: MeasId, d: usize) -> &[MeasId] {
-        &self.backward[self.slot(m) * self.max_gap + d - 1]
+        self.backward_lists(m).get(d)
     }
 
     /// The range of ids of the measurements of the scans `window` (forgotten and other
@@ -562,7 +585,7 @@ impl Problem {
 
 /// Gives memory back after forgetting: capacity stays within a quarter of the length, so
 /// a problem that streams holds what its kept scans need, not the most it ever held.
-fn shrink<T>(v: &mut Vec<T>) {
+pub(crate) fn shrink<T>(v: &mut Vec<T>) {
     if v.capacity() > v.len() + v.len() / 4 + 8 {
         v.shrink_to_fit();
     }

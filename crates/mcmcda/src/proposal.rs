@@ -317,7 +317,7 @@ impl Partition<'_> {
         let d_bar = self.problem.max_gap();
         let lists = self.problem.backward_lists(s1);
         for d in 1..=d_bar.min(t_s1) {
-            for &y in &lists[d - 1] {
+            for &y in lists.get(d) {
                 let k2 = self.owner_of(y);
                 if k2 == FREE || k2 == OUTSIDE || k2 as usize == k1 {
                     continue;

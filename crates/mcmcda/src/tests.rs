@@ -2020,3 +2020,46 @@ fn neighbour_lists_equal_brute_force() {
         "the case must exercise the lists: {non_empty}"
     );
 }
+
+/// A problem without neighbourhoods gives GNN the same tracks as the full problem, has empty
+/// lists, and refuses to be partitioned (MCMCDA needs the lists) with a typed error.
+#[test]
+fn a_problem_without_neighbourhoods_serves_gnn_and_refuses_mcmcda() {
+    use crate::{NearestNeighbourConfig, greedy_initial_partition, nearest_neighbour_tracks};
+    let scans = three_walkers(8, &[(3, 1), (4, 1), (6, 2)]);
+    let model = McmcdaConfig::default().check().unwrap();
+    let full = Problem::from_scans(&model, &scans).unwrap();
+    let mut bare = Problem::without_neighbourhoods(&model, scans[0].frame);
+    for scan in &scans {
+        let points: Vec<Vector2<f64>> = scan.measurements.iter().map(|m| m.value).collect();
+        bare.push_scan(scan.frame, &points).unwrap();
+    }
+    assert!(full.has_neighbourhoods() && !bare.has_neighbourhoods());
+    let window = full.all_scans().unwrap();
+    let gnn = |p: &Problem| {
+        nearest_neighbour_tracks(
+            &model,
+            p,
+            window.clone(),
+            &NearestNeighbourConfig::default(),
+        )
+        .unwrap()
+    };
+    assert_eq!(gnn(&bare), gnn(&full));
+    assert!((0..full.n_measurements() as u32).any(|m| !full.forward(m, 1).is_empty()));
+    for m in 0..bare.n_measurements() as u32 {
+        assert_eq!(bare.position(m), full.position(m));
+        assert!(
+            (1..=model.max_gap() as usize)
+                .all(|d| bare.forward(m, d).is_empty() && bare.backward(m, d).is_empty())
+        );
+    }
+    assert_eq!(
+        Partition::empty(&model, &bare, window.clone()).unwrap_err(),
+        Error::NoNeighbourhoods
+    );
+    assert_eq!(
+        greedy_initial_partition(&model, &bare, window).unwrap_err(),
+        Error::NoNeighbourhoods
+    );
+}

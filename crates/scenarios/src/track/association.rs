@@ -10,25 +10,40 @@ pub(super) fn track_points(
     seed: u64,
 ) -> Result<TrackSet> {
     let model = settings.model.check()?;
-    let (detections, by_frame, problem) = problem_of(&model, rows, settings.score_model.as_ref())?;
-    let associations: Vec<Vec<MeasId>> = match tracker {
-        Tracker::McmcdaOnline => return track_online(&model, &by_frame, settings, seed),
+    let scores = settings.score_model.as_ref();
+    let (detections, associations): (_, Vec<Vec<MeasId>>) = match tracker {
+        // The online tracker builds its own problem, scan by scan.
+        Tracker::McmcdaOnline => {
+            return track_online(&model, &detections_by_frame(rows).1, settings, seed);
+        }
         Tracker::Mcmcda => {
+            let (detections, _, problem) = problem_of(&model, rows, scores, Problem::empty)?;
             // The chain starts from GNN's tracks (feasible in Ω by construction), so the MAP
             // is at least as probable as GNN's answer under the fitted model.
             let window = problem.all_scans()?;
             let start = nearest_neighbour_tracks(&model, &problem, window.clone(), &settings.gnn)?;
             let start = Partition::from_tracks(&model, &problem, window, &start)?;
-            let map = run_chains(&start, 1, settings.offline.samples(detections.len()), seed)?;
+            let map = run_chains(
+                &start,
+                settings.offline.chains,
+                settings.offline.samples(detections.len()),
+                seed,
+            )?;
             let max_gap = (settings.offline.link_gap_factor * f64::from(model.config().max_gap))
                 .round() as u32;
-            link_tracklets(map.tracks, &detections, model.config(), max_gap)
+            let linked = link_tracklets(map.tracks, &detections, model.config(), max_gap);
+            (detections, linked)
         }
         Tracker::Gnn | Tracker::Phd => {
+            let (detections, _, problem) =
+                problem_of(&model, rows, scores, Problem::without_neighbourhoods)?;
             let window = problem.all_scans()?;
-            nearest_neighbour_tracks(&model, &problem, window, &settings.gnn)?
+            let tracks = nearest_neighbour_tracks(&model, &problem, window, &settings.gnn)?;
+            (detections, tracks)
         }
         Tracker::GnnOnline => {
+            let (detections, by_frame, problem) =
+                problem_of(&model, rows, scores, Problem::without_neighbourhoods)?;
             let window = problem.all_scans()?;
             let tracks = nearest_neighbour_tracks(&model, &problem, window, &settings.gnn)?;
             let last = by_frame.keys().next_back().copied().unwrap_or(0);

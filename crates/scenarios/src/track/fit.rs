@@ -6,20 +6,29 @@ use super::*;
 type ByFrame = std::collections::BTreeMap<Frame, Vec<MotRow>>;
 
 /// Detections in measurement-id order, by frame (file order within a frame; MCMCDA's
-/// measurement ids follow this order), and the problem of their centres, with each
-/// detection's score ratio when `scores` is given.
-pub(super) fn problem_of(
-    model: &mcmcda::Model,
-    rows: &[MotRow],
-    scores: Option<&ScoreModel>,
-) -> Result<(Vec<MotRow>, ByFrame, Problem)> {
-    let mut by_frame: std::collections::BTreeMap<Frame, Vec<MotRow>> = Default::default();
+/// measurement ids follow this order).
+pub(super) fn detections_by_frame(rows: &[MotRow]) -> (Vec<MotRow>, ByFrame) {
+    let mut by_frame = ByFrame::new();
     for r in rows {
         by_frame.entry(r.frame).or_default().push(*r);
     }
     let detections: Vec<MotRow> = by_frame.values().flatten().copied().collect();
+    (detections, by_frame)
+}
+
+/// [`detections_by_frame`] and the problem of their centres, with each detection's score
+/// ratio when `scores` is given. `new` makes the empty problem: [`Problem::empty`] for
+/// MCMCDA's chain, [`Problem::without_neighbourhoods`] for GNN, which reads no neighbourhood
+/// (with d̄ = 24 at 25 fps, building them was half of a one-sample online run).
+pub(super) fn problem_of(
+    model: &mcmcda::Model,
+    rows: &[MotRow],
+    scores: Option<&ScoreModel>,
+    new: fn(&mcmcda::Model, Frame) -> Problem,
+) -> Result<(Vec<MotRow>, ByFrame, Problem)> {
+    let (detections, by_frame) = detections_by_frame(rows);
     let first = by_frame.keys().next().copied().unwrap_or(0);
-    let mut problem = Problem::empty(model, first);
+    let mut problem = new(model, first);
     for (frame, dets) in &by_frame {
         problem.push_scan_scored(*frame, &centres(dets), &score_ratios(scores, dets))?;
     }
@@ -55,7 +64,8 @@ pub fn fit_model(base: &McmcdaConfig, rows: &[MotRow], fit: &FitConfig) -> Resul
     let mut config = base.clone();
     for _ in 0..fit.iterations {
         let model = config.check()?;
-        let (detections, by_frame, problem) = problem_of(&model, rows, None)?;
+        let (detections, by_frame, problem) =
+            problem_of(&model, rows, None, Problem::without_neighbourhoods)?;
         let (Some(first), Some(last)) = (
             by_frame.keys().next().copied(),
             by_frame.keys().next_back().copied(),
@@ -223,7 +233,8 @@ pub fn fit_scores(
         return Ok(None);
     }
     let checked = model.check()?;
-    let (detections, _, problem) = problem_of(&checked, rows, None)?;
+    let (detections, _, problem) =
+        problem_of(&checked, rows, None, Problem::without_neighbourhoods)?;
     let window = problem.all_scans()?;
     let tracks = nearest_neighbour_tracks(&checked, &problem, window, gnn)?;
     let mut in_track = vec![0usize; detections.len()];
