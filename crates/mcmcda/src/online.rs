@@ -16,6 +16,7 @@ use std::collections::{BTreeMap, HashMap};
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use tracker_model::{Frame, GATE_CHI2_2D, TrackSet, Vec2, ensure_positive};
 
@@ -53,6 +54,11 @@ pub struct OnlineConfig {
     /// start is then kept as the window's MAP. A heuristic: the older scans of such a window
     /// are not revisited. `false` (the default) samples every window.
     pub skip_unambiguous: bool,
+    /// Independent chains per window, run in parallel from the same start, each with
+    /// `samples_per_scan` samples (and its own `patience`); the best MAP among them is the
+    /// window's. Chain i draws from stream i of the tracker's seed, so the output is the same
+    /// at any thread count, and 1 (the default) is the single chain of Algorithm 4.
+    pub chains: usize,
 }
 
 impl Default for OnlineConfig {
@@ -64,6 +70,7 @@ impl Default for OnlineConfig {
             coast_scans: 2,
             patience: 0,
             skip_unambiguous: false,
+            chains: 1,
         }
     }
 }
@@ -79,6 +86,12 @@ impl OnlineConfig {
             ));
         }
         ensure_positive(self.extension_gate, "extension_gate")?;
+        if !(1..=64).contains(&self.chains) {
+            return Err(invalid_parameter(
+                "chains",
+                format!("{}; it must be in 1..=64", self.chains),
+            ));
+        }
         Ok(())
     }
 }
@@ -128,7 +141,9 @@ pub struct OnlineTracker {
     model: Model,
     problem: Problem,
     config: OnlineConfig,
-    rng: ChaCha8Rng,
+    /// One generator per chain: stream i of the seed for chain i (chain 0's also draws the
+    /// identity samples of [`Self::sample_joins`]).
+    rngs: Vec<ChaCha8Rng>,
     /// The previous window's MAP with labels.
     map: Vec<(u64, Vec<MeasId>)>,
     next_label: u64,
@@ -154,7 +169,13 @@ impl OnlineTracker {
             problem: Problem::empty(&model, first_frame),
             model,
             config,
-            rng: ChaCha8Rng::seed_from_u64(seed),
+            rngs: (0..config.chains)
+                .map(|i| {
+                    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                    rng.set_stream(i as u64);
+                    rng
+                })
+                .collect(),
             map: Vec::new(),
             next_label: 0,
             committed: BTreeMap::new(),
@@ -234,14 +255,14 @@ impl OnlineTracker {
         }
         let skip = self.config.skip_unambiguous;
         let ambiguous = extend_into_last_scan(&mut start, self.config.extension_gate, skip);
-        let mut chain = Chain::new(start, &mut self.rng);
-        if !skip || ambiguous || self.late_pending {
-            self.samples_run += run_window(&mut chain, &self.config);
-        }
+        let (best, log_posterior) = if !skip || ambiguous || self.late_pending {
+            let (best, log_posterior, samples) = sample_window(start, &mut self.rngs, &self.config);
+            self.samples_run += samples;
+            (best, log_posterior)
+        } else {
+            (start.canonical(), start.log_posterior())
+        };
         self.late_pending = false;
-        let (best, log_posterior) = chain.map();
-        let best = best.to_vec();
-        drop(chain);
         self.map = relabel(&self.map, best, &mut self.next_label);
         let map_partition = Partition::from_tracks(
             &self.model,
@@ -322,7 +343,7 @@ impl OnlineTracker {
         let tracks: Vec<Vec<MeasId>> = self.map.iter().map(|(_, t)| t.clone()).collect();
         let start = Partition::from_tracks(&self.model, &self.problem, lo..=hi, &tracks)?;
         let problem = &self.problem;
-        let mut chain = Chain::new(start, &mut self.rng);
+        let mut chain = Chain::new(start, &mut self.rngs[0]);
         let mut samples = Vec::with_capacity(usize::try_from(n_samples).unwrap_or(0));
         for _ in 0..n_samples {
             chain.step();
@@ -494,6 +515,36 @@ impl OnlineTracker {
 /// Runs a window's chain: `samples_per_scan` steps, or with [`OnlineConfig::patience`] > 0
 /// until that many consecutive steps leave the MAP unchanged (at most `samples_per_scan`).
 /// Returns the steps taken. With patience 0 this is exactly [`Chain::run`].
+/// Runs the window's chains from `start` (one per generator, in parallel when more than one)
+/// and returns the best MAP (the first chain's on a tie), its log posterior and the samples
+/// drawn by all chains.
+fn sample_window(
+    start: Partition<'_>,
+    rngs: &mut [ChaCha8Rng],
+    config: &OnlineConfig,
+) -> (Vec<Vec<MeasId>>, f64, u64) {
+    let one = |start: Partition<'_>, rng: &mut ChaCha8Rng| {
+        let mut chain = Chain::new(start, rng);
+        let samples = run_window(&mut chain, config);
+        let (best, log_posterior) = chain.map();
+        (best.to_vec(), log_posterior, samples)
+    };
+    if let [rng] = rngs {
+        return one(start, rng);
+    }
+    let runs: Vec<_> = rngs
+        .par_iter_mut()
+        .map(|rng| one(start.clone(), rng))
+        .collect();
+    let samples = runs.iter().map(|r| r.2).sum();
+    let mut best = runs
+        .into_iter()
+        .reduce(|best, run| if run.1 > best.1 { run } else { best })
+        .unwrap_or_default();
+    best.2 = samples;
+    best
+}
+
 fn run_window<R: rand::Rng>(chain: &mut Chain<'_, R>, config: &OnlineConfig) -> u64 {
     let budget = config.samples_per_scan;
     if config.patience == 0 {

@@ -2063,3 +2063,52 @@ fn a_problem_without_neighbourhoods_serves_gnn_and_refuses_mcmcda() {
         Error::NoNeighbourhoods
     );
 }
+
+/// Two chains per window: the same tracks as one chain on three walkers with misses, twice
+/// the samples, the same bytes with one and with two threads, and a window's log posterior
+/// at least that of the one-chain tracker's first window (chain 0 draws what the one-chain
+/// tracker draws, and the window keeps the better MAP). Zero chains is a typed error.
+#[test]
+fn online_chains_in_parallel_are_reproducible_and_no_worse() {
+    use crate::{OnlineConfig, OnlineTracker};
+    let scans = three_walkers(30, &[(10, 0), (20, 1)]);
+    let one = OnlineConfig {
+        window: 6,
+        samples_per_scan: 300,
+        ..OnlineConfig::default()
+    };
+    let two = OnlineConfig { chains: 2, ..one };
+    let (tracks, samples) = online_run(&scans, &[], one);
+    let in_pool = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| online_run(&scans, &[], two))
+    };
+    let (tracks_two, samples_two) = in_pool(1);
+    assert_eq!(in_pool(2), (tracks_two.clone(), samples_two));
+    assert_eq!(tracks_two, tracks);
+    assert_eq!(samples_two, 2 * samples);
+    // The first window with tracks to find, scans 0-1: both trackers start it from the same
+    // (empty) MAP of scan 0, and chain 0 has drawn what the one-chain tracker drew.
+    let first_window = |config: OnlineConfig| {
+        let model = McmcdaConfig::default().check().unwrap();
+        let mut tracker = OnlineTracker::new(model, 0, config, 3).unwrap();
+        let mut last = f64::NAN;
+        for s in &scans[..2] {
+            let points: Vec<Vector2<f64>> = s.measurements.iter().map(|m| m.value).collect();
+            last = tracker.push_scan(s.frame, &points).unwrap().log_posterior;
+        }
+        last
+    };
+    assert!(first_window(two) >= first_window(one));
+    let model = McmcdaConfig::default().check().unwrap();
+    for chains in [0, 65] {
+        let bad = OnlineConfig { chains, ..one };
+        assert!(matches!(
+            OnlineTracker::new(model.clone(), 0, bad, 3),
+            Err(Error::Model(tracker_model::Error::InvalidParameter { .. }))
+        ));
+    }
+}

@@ -271,44 +271,50 @@ fn track_online(
     let mut online = OnlineTracker::new(model.clone(), first, settings.online, seed)?;
     let mut detections: Vec<MotRow> = Vec::new();
     let mut out: std::collections::BTreeMap<u64, Vec<TrackPoint>> = Default::default();
-    for (&frame, dets) in by_frame {
-        detections.extend_from_slice(dets);
-        let step = online.push_scan_scored(
-            frame,
-            &centres(dets),
-            &score_ratios(settings.score_model.as_ref(), dets),
-        )?;
-        let map: std::collections::HashMap<u64, &Vec<MeasId>> =
-            online.map_tracks().iter().map(|(l, t)| (*l, t)).collect();
-        for (label, position) in &step.estimates {
-            let Some(meas) = map.get(label) else {
-                continue;
-            };
-            let dets: Vec<(Frame, BoundingBox)> = meas
-                .iter()
-                .map(|&m| {
-                    let d = &detections[m as usize];
-                    (d.frame, d.bbox)
-                })
-                .collect();
-            let Some(&(last_frame, _)) = dets.last() else {
-                continue;
-            };
-            let fitted = smooth_boxes(&dets, &settings.boxes, Some(last_frame))?;
-            let Some(tracker_model::Location::Box(at_last)) = fitted.last().map(|p| p.location)
-            else {
-                continue;
-            };
-            let bbox = if last_frame == frame {
-                at_last
-            } else {
-                BoundingBox::from_centre(*position, at_last.width, at_last.height)?
-            };
-            out.entry(*label)
-                .or_default()
-                .push(TrackPoint::boxed(frame, bbox));
+    // The frames run on a thread of rayon's pool, so that the window's chains (`[online]
+    // chains`) fork from inside it rather than wait for the pool to wake up at every frame
+    // (as the PHD tracker's frames do, track/phd.rs). No result depends on the threads.
+    rayon::scope(|_| -> Result<()> {
+        for (&frame, dets) in by_frame {
+            detections.extend_from_slice(dets);
+            let step = online.push_scan_scored(
+                frame,
+                &centres(dets),
+                &score_ratios(settings.score_model.as_ref(), dets),
+            )?;
+            let map: std::collections::HashMap<u64, &Vec<MeasId>> =
+                online.map_tracks().iter().map(|(l, t)| (*l, t)).collect();
+            for (label, position) in &step.estimates {
+                let Some(meas) = map.get(label) else {
+                    continue;
+                };
+                let dets: Vec<(Frame, BoundingBox)> = meas
+                    .iter()
+                    .map(|&m| {
+                        let d = &detections[m as usize];
+                        (d.frame, d.bbox)
+                    })
+                    .collect();
+                let Some(&(last_frame, _)) = dets.last() else {
+                    continue;
+                };
+                let fitted = smooth_boxes(&dets, &settings.boxes, Some(last_frame))?;
+                let Some(tracker_model::Location::Box(at_last)) = fitted.last().map(|p| p.location)
+                else {
+                    continue;
+                };
+                let bbox = if last_frame == frame {
+                    at_last
+                } else {
+                    BoundingBox::from_centre(*position, at_last.width, at_last.height)?
+                };
+                out.entry(*label)
+                    .or_default()
+                    .push(TrackPoint::boxed(frame, bbox));
+            }
         }
-    }
+        Ok(())
+    })?;
     let tracks = out
         .into_iter()
         .map(|(label, points)| Track::from_points(TrackId(label + 1), points))
