@@ -33,7 +33,7 @@ use crate::sampler::Chain;
 pub struct OnlineConfig {
     /// t_win: scans in the sliding window.
     pub window: usize,
-    /// MCMC samples per window.
+    /// MCMC samples per window and chain (see `chains`).
     pub samples_per_scan: u64,
     /// χ² gate of the greedy extension of live tracks into a new scan.
     pub extension_gate: f64,
@@ -76,8 +76,8 @@ impl Default for OnlineConfig {
 }
 
 impl OnlineConfig {
-    /// Checks the window (at least 2 scans, the shortest a track spans) and the extension
-    /// gate (finite, > 0). [`OnlineTracker::new`] calls this.
+    /// Checks the window (at least 2 scans, the shortest a track spans), the extension gate
+    /// (finite, > 0) and the chain count (1 to 64). [`OnlineTracker::new`] calls this.
     pub fn check(&self) -> Result<()> {
         if self.window < 2 {
             return Err(invalid_parameter(
@@ -292,9 +292,9 @@ impl OnlineTracker {
         })
     }
 
-    /// MCMC samples the windows have drawn so far (`samples_per_scan` per scan unless
-    /// [`OnlineConfig::patience`] stops windows early or [`OnlineConfig::skip_unambiguous`]
-    /// skips scans; [`Self::sample_joins`] is not counted).
+    /// MCMC samples the windows have drawn so far, all chains together (`chains` ×
+    /// `samples_per_scan` per scan unless [`OnlineConfig::patience`] stops chains early or
+    /// [`OnlineConfig::skip_unambiguous`] skips scans; [`Self::sample_joins`] is not counted).
     pub fn samples_run(&self) -> u64 {
         self.samples_run
     }
@@ -512,13 +512,10 @@ impl OnlineTracker {
     }
 }
 
-/// Runs a window's chain: `samples_per_scan` steps, or with [`OnlineConfig::patience`] > 0
-/// until that many consecutive steps leave the MAP unchanged (at most `samples_per_scan`).
-/// Returns the steps taken. With patience 0 this is exactly [`Chain::run`].
 /// Runs the window's chains from `start` (one per generator, in parallel when more than one)
 /// and returns the best MAP (the first chain's on a tie), its log posterior and the samples
 /// drawn by all chains.
-fn sample_window(
+pub(crate) fn sample_window(
     start: Partition<'_>,
     rngs: &mut [ChaCha8Rng],
     config: &OnlineConfig,
@@ -545,7 +542,10 @@ fn sample_window(
     best
 }
 
-fn run_window<R: rand::Rng>(chain: &mut Chain<'_, R>, config: &OnlineConfig) -> u64 {
+/// Runs a window's chain: `samples_per_scan` steps, or with [`OnlineConfig::patience`] > 0
+/// until that many consecutive steps leave the MAP unchanged (at most `samples_per_scan`).
+/// Returns the steps taken. With patience 0 this is exactly [`Chain::run`].
+pub(crate) fn run_window<R: rand::Rng>(chain: &mut Chain<'_, R>, config: &OnlineConfig) -> u64 {
     let budget = config.samples_per_scan;
     if config.patience == 0 {
         chain.run(budget);

@@ -530,7 +530,7 @@ impl Problem {
         self.scan_of[self.slot(m)] as usize
     }
 
-    /// L(y_m, t_m, d), d ∈ 1..=d̄.
+    /// L(y_m, t_m, d), d ∈ 1..=d̄ (empty on a problem [`Self::without_neighbourhoods`]).
     ///
     /// # Panics
     /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.
@@ -561,7 +561,7 @@ impl Problem {
     }
 
     /// The measurements y' of scan t_m − d with y_m ∈ L(y', t_m − d, d) (none once scan
-    /// t_m − d is forgotten).
+    /// t_m − d is forgotten, or on a problem [`Self::without_neighbourhoods`]).
     ///
     /// # Panics
     /// If `m` is not [`Self::contains`]ed: an unknown or forgotten id.

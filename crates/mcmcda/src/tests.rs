@@ -1962,7 +1962,7 @@ fn online_skip_unambiguous_samples_only_the_ambiguous_scans() {
 /// Every neighbour list against brute force: `forward(m, d)` holds exactly the measurements of
 /// scan s(m) + d within reach of m, and `backward(m, d)` those of scan s(m) − d, in id order,
 /// on a problem with empty scans (skipped frame numbers), late measurements and gaps of up to
-/// d̄ = 4.
+/// d̄ = 4; then again after the oldest scans are forgotten.
 #[test]
 fn neighbour_lists_equal_brute_force() {
     let model = McmcdaConfig {
@@ -1990,7 +1990,29 @@ fn neighbour_lists_equal_brute_force() {
             }
         }
     }
-    let all: Vec<u32> = (0..problem.n_measurements() as u32).collect();
+    let non_empty = lists_against_brute_force(&problem, &model);
+    assert!(
+        non_empty > 20,
+        "the case must exercise the lists: {non_empty}"
+    );
+    // Forgetting the scans before frame 9 drops the late measurement added to frame 8
+    // (scan 7) after frame 12, whose id lies above measurements that are kept: the kept
+    // lists must lose exactly the entries in forgotten scans.
+    problem.forget_before(8);
+    assert!((0..problem.n_measurements() as u32).any(|m| problem.is_forgotten(m)));
+    let non_empty = lists_against_brute_force(&problem, &model);
+    assert!(
+        non_empty > 5,
+        "the case must exercise the lists: {non_empty}"
+    );
+}
+
+/// Checks every kept measurement's lists against brute force over the kept measurements;
+/// returns how many forward lists are non-empty.
+fn lists_against_brute_force(problem: &Problem, model: &Model) -> usize {
+    let all: Vec<u32> = (0..problem.n_measurements() as u32)
+        .filter(|&m| problem.contains(m))
+        .collect();
     let mut non_empty = 0;
     for &m in &all {
         for d in 1..=4 {
@@ -2015,10 +2037,7 @@ fn neighbour_lists_equal_brute_force() {
             non_empty += usize::from(!later.is_empty());
         }
     }
-    assert!(
-        non_empty > 20,
-        "the case must exercise the lists: {non_empty}"
-    );
+    non_empty
 }
 
 /// A problem without neighbourhoods gives GNN the same tracks as the full problem, has empty
@@ -2111,4 +2130,43 @@ fn online_chains_in_parallel_are_reproducible_and_no_worse() {
             Err(Error::Model(tracker_model::Error::InvalidParameter { .. }))
         ));
     }
+}
+
+/// A window's chains: `sample_window` returns the MAP of the chain with the highest log
+/// posterior among the chains run one by one from the same start with the same generators,
+/// and the samples of all of them; the case is one where chain 0 is not the best.
+#[test]
+fn sample_window_keeps_the_best_chain() {
+    use crate::OnlineConfig;
+    use crate::online::{run_window, sample_window};
+    let scans = three_walkers(8, &[(3, 1), (5, 2)]);
+    let model = McmcdaConfig::default().check().unwrap();
+    let problem = Problem::from_scans(&model, &scans).unwrap();
+    let start = Partition::empty(&model, &problem, problem.all_scans().unwrap()).unwrap();
+    let config = OnlineConfig {
+        samples_per_scan: 40,
+        chains: 4,
+        ..OnlineConfig::default()
+    };
+    let rngs: Vec<ChaCha8Rng> = (0..4)
+        .map(|i| {
+            let mut rng = ChaCha8Rng::seed_from_u64(11);
+            rng.set_stream(i);
+            rng
+        })
+        .collect();
+    let alone: Vec<(Vec<Vec<u32>>, f64)> = rngs
+        .iter()
+        .map(|rng| {
+            let mut chain = Chain::new(start.clone(), rng.clone());
+            run_window(&mut chain, &config);
+            let (best, lp) = chain.map();
+            (best.to_vec(), lp)
+        })
+        .collect();
+    let winner = (0..4).fold(0, |w, i| if alone[i].1 > alone[w].1 { i } else { w });
+    assert_ne!(winner, 0, "the case must have a better chain than chain 0");
+    let (best, lp, samples) = sample_window(start, &mut rngs.clone(), &config);
+    assert_eq!((best, lp), alone[winner].clone());
+    assert_eq!(samples, 4 * 40);
 }

@@ -116,10 +116,10 @@ pub struct OfflineConfig {
     /// The fewest samples, whatever the file's size.
     pub min_samples: u64,
     /// Independent chains from the same start, run in parallel, each with its share of the
-    /// samples above (the total does not change); the best MAP among them is the answer. Two
-    /// (the default) halve the chain's time on two cores, and on the tuning sequences of
-    /// `mot-realistic` two half-length chains tracked as well as one full-length chain
-    /// (docs/mot-realistic.md).
+    /// samples above (the total, rounded up to a multiple of the chain count); the best MAP
+    /// among them is the answer. Two (the default) halve the chain's time on two cores, and on
+    /// the tuning sequences of `mot-realistic` two half-length chains tracked as well as one
+    /// full-length chain (docs/mot-realistic.md).
     pub chains: usize,
     /// Tracklet linking after the chain (min-cost, by the motion model; docs/mot-realistic.md):
     /// a track may continue one that ended at most this many times d̄ frames before (0: no
@@ -878,13 +878,14 @@ impl OfflineConfig {
         Ok(())
     }
 
-    /// Samples per chain.
+    /// Samples per chain: the total shared by the chains, rounded up (so no chain is left
+    /// without a sample).
     fn samples(&self, n_detections: usize) -> u64 {
         (self
             .samples_per_detection
             .saturating_mul(n_detections as u64))
         .max(self.min_samples)
-            / self.chains as u64
+        .div_ceil(self.chains as u64)
     }
 }
 

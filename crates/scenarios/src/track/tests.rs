@@ -178,6 +178,22 @@ fn zero_samples_are_an_error() {
 }
 
 #[test]
+fn chain_counts_out_of_range_are_errors_naming_the_table() {
+    for chains in [0, 65] {
+        for (table, tracker) in [
+            ("offline", Tracker::Mcmcda),
+            ("online", Tracker::McmcdaOnline),
+        ] {
+            let err = error_of(&format!("[{table}]\nchains = {chains}\n"), tracker);
+            assert!(
+                err.contains(&format!("[{table}]")) && err.contains("chains"),
+                "{err}"
+            );
+        }
+    }
+}
+
+#[test]
 fn no_track_from_detections_says_why() {
     // Three detections 100 frames apart: more than max_gap, so no track can form.
     let rows: Vec<MotRow> = [1, 101, 201]
