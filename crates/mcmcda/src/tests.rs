@@ -2106,7 +2106,9 @@ fn online_chains_in_parallel_are_reproducible_and_no_worse() {
             .install(|| online_run(&scans, &[], two))
     };
     let (tracks_two, samples_two) = in_pool(1);
-    assert_eq!(in_pool(2), (tracks_two.clone(), samples_two));
+    for threads in [2, 3] {
+        assert_eq!(in_pool(threads), (tracks_two.clone(), samples_two));
+    }
     assert_eq!(tracks_two, tracks);
     assert_eq!(samples_two, 2 * samples);
     // The first window with tracks to find, scans 0-1: both trackers start it from the same
