@@ -5,7 +5,8 @@
 //!
 //! * [`McmcdaConfig`] → [`Model`]: the posterior of Oh, Russell & Sastry 2009 eq. 9 and the
 //!   proposal parameters;
-//! * [`Problem`]: measurements by scan with the neighbourhoods L(y, t, d) (eq. 27);
+//! * [`Problem`]: measurements by scan with the neighbourhoods L(y, t, d) (eq. 27), or
+//!   without them for the nearest-neighbour baseline ([`Problem::without_neighbourhoods`]);
 //!   [`Problem::all_scans`] is the window of a whole-problem run;
 //! * [`batch_mcmcda`] with a [`BatchConfig`]: the whole problem in one call (greedy start,
 //!   then [`run_chains`]);

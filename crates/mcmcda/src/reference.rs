@@ -7,7 +7,7 @@ use nalgebra::Vector4;
 use tracker_model::{Gaussian, LinearObservation, ObservationModel, TransitionModel};
 
 use crate::config::{Model, TrackEnd, TrackInit};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::partition::Partition;
 use crate::problem::{MeasId, Problem};
 
@@ -127,12 +127,16 @@ fn track_log_likelihood(
 
 /// Every feasible partition of the scans `window` (tracks of ≥ 2 measurements, one per scan,
 /// gaps ≤ d̄ within the neighbourhood radius). Exponential: for problems of a handful of
-/// measurements only.
+/// measurements only. Fails with [`Error::NoNeighbourhoods`] on a problem built
+/// [`Problem::without_neighbourhoods`].
 pub fn enumerate_partitions(
     model: &Model,
     problem: &Problem,
     window: std::ops::RangeInclusive<usize>,
 ) -> Result<Vec<Vec<Vec<MeasId>>>> {
+    if !problem.has_neighbourhoods() {
+        return Err(Error::NoNeighbourhoods);
+    }
     let ids: Vec<MeasId> = window
         .clone()
         .flat_map(|s| problem.scan(s).iter().copied())

@@ -2078,7 +2078,11 @@ fn a_problem_without_neighbourhoods_serves_gnn_and_refuses_mcmcda() {
         Error::NoNeighbourhoods
     );
     assert_eq!(
-        greedy_initial_partition(&model, &bare, window).unwrap_err(),
+        greedy_initial_partition(&model, &bare, window.clone()).unwrap_err(),
+        Error::NoNeighbourhoods
+    );
+    assert_eq!(
+        crate::reference::enumerate_partitions(&model, &bare, window).unwrap_err(),
         Error::NoNeighbourhoods
     );
 }

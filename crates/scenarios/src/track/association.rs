@@ -273,7 +273,7 @@ fn track_online(
     let mut out: std::collections::BTreeMap<u64, Vec<TrackPoint>> = Default::default();
     // The frames run on a thread of rayon's pool, so that the window's chains (`[online]
     // chains`) fork from inside it rather than wait for the pool to wake up at every frame
-    // (as the PHD tracker's frames do, track/phd.rs). No result depends on the threads.
+    // (like the PHD tracker's frames, track/phd.rs). No result depends on the threads.
     rayon::scope(|_| -> Result<()> {
         for (&frame, dets) in by_frame {
             detections.extend_from_slice(dets);

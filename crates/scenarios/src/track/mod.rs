@@ -239,8 +239,8 @@ pub struct ScoreModel {
 /// - each window runs two chains of 1,000 samples in parallel instead of one of 2,000, and
 ///   no sample is drawn at a frame whose every detection extends the only track gating it.
 ///   On the tuning sequences (tracker seeds 0-2) this tracked as well as the single chain
-///   (mean MOTA 0.860 / IDF1 0.722 against 0.860 / 0.717) in 0.31-0.43 ms per frame
-///   instead of 0.75-0.79 (docs/mot-realistic.md).
+///   (mean MOTA 0.860 / IDF1 0.722 against 0.860 / 0.717); on the reported sequences it
+///   takes 0.31-0.43 ms per frame instead of 0.74-0.79 (docs/mot-realistic.md).
 fn online_base() -> OnlineConfig {
     OnlineConfig {
         coast_scans: 5,

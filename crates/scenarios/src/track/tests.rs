@@ -178,6 +178,44 @@ fn zero_samples_are_an_error() {
 }
 
 #[test]
+fn offline_chains_share_the_samples_rounded_up() {
+    let with = |samples_per_detection, min_samples, chains| OfflineConfig {
+        samples_per_detection,
+        min_samples,
+        chains,
+        ..OfflineConfig::default()
+    };
+    // 20 × 2225 = 44,500 over two chains: 22,250 each; the floor when the file is small.
+    assert_eq!(with(20, 20_000, 2).samples(2225), 22_250);
+    assert_eq!(with(20, 20_000, 2).samples(10), 10_000);
+    // An odd total rounds up, and one sample over two chains still moves both.
+    assert_eq!(with(3, 0, 2).samples(5), 8);
+    assert_eq!(with(0, 1, 2).samples(100), 1);
+    assert_eq!(with(20, 20_000, 1).samples(2225), 44_500);
+    // 64 chains are accepted (short chains, to keep the test quick).
+    for (text, tracker) in [
+        (
+            "[offline]\nchains = 64\nsamples_per_detection = 1\nmin_samples = 64\n",
+            Tracker::Mcmcda,
+        ),
+        (
+            "[online]\nchains = 64\nsamples_per_scan = 2\n",
+            Tracker::McmcdaOnline,
+        ),
+    ] {
+        let table = if tracker == Tracker::Mcmcda {
+            "offline"
+        } else {
+            "online"
+        };
+        assert!(
+            track_detections(tracker, &walkers(), &config(text), 1).is_ok(),
+            "{table}: 64 chains"
+        );
+    }
+}
+
+#[test]
 fn chain_counts_out_of_range_are_errors_naming_the_table() {
     for chains in [0, 65] {
         for (table, tracker) in [
