@@ -15,7 +15,7 @@ use serde::Serialize;
 
 use crate::{Outcome, read_file, workspace_root};
 
-pub use xtask::inputs::ScenarioFile;
+pub use xtask::scenario_file::ScenarioFile;
 
 /// A scenario with its name (the file stem).
 #[derive(Debug, Clone)]
@@ -109,7 +109,7 @@ pub fn load_all(filter: Option<&str>) -> Result<Vec<Scenario>> {
 
 fn load_file(path: &Path) -> Result<ScenarioFile> {
     let text = fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    xtask::inputs::load_scenario(&text, &path.display().to_string())
+    xtask::scenario_file::load_scenario(&text, &path.display().to_string())
 }
 
 /// Runs scenarios in parallel (each on its own seeded generator), returning results in name

@@ -27,17 +27,7 @@ pub(super) struct TuneScore {
 pub(super) fn peak_counts(sim: &Simulated, run: &av_fusion::AvRun) -> (usize, usize, usize, usize) {
     let (mut pairs, mut found, mut false_peaks) = (0, 0, 0);
     for scan in &run.scans {
-        let truth: Vec<Vec2> = sim
-            .gt
-            .tracks()
-            .iter()
-            .filter_map(|t| {
-                t.points()
-                    .iter()
-                    .find(|q| u64::from(q.frame) == scan.tick)
-                    .map(|q| q.location.position())
-            })
-            .collect();
+        let truth = vehicles_at(sim, scan.tick);
         pairs += truth.len();
         found += truth
             .iter()
@@ -50,6 +40,20 @@ pub(super) fn peak_counts(sim: &Simulated, run: &av_fusion::AvRun) -> (usize, us
             .count();
     }
     (pairs, found, false_peaks, run.scans.len())
+}
+
+/// The true positions of the vehicles present at tick `tick`.
+fn vehicles_at(sim: &Simulated, tick: u64) -> Vec<Vec2> {
+    sim.gt
+        .tracks()
+        .iter()
+        .filter_map(|t| {
+            t.points()
+                .iter()
+                .find(|q| u64::from(q.frame) == tick)
+                .map(|q| q.location.position())
+        })
+        .collect()
 }
 
 pub(super) fn tune_score(p: &Params, sims: &[(bool, Simulated)], a: usize) -> Result<TuneScore> {
@@ -461,15 +465,11 @@ pub(super) fn fit_peak_scores(p: &Params, runs: &[RunSpec], which: &str) -> Resu
             .map(|sim| {
                 let run = score_with(p, sim, nominal(p), a, &s, None)?.result;
                 let mut out = Vec::new();
-                for (k, scan) in run.scans.iter().enumerate() {
+                for scan in &run.scans {
                     let cells = scan.grid.values().len() as f64;
+                    let truth = vehicles_at(sim, scan.tick);
                     for m in &scan.peaks {
-                        let near = sim.gt.tracks().iter().any(|g| {
-                            g.points().iter().any(|q| {
-                                q.frame as usize == k
-                                    && (q.location.position() - m.position).norm() <= f.near_m
-                            })
-                        });
+                        let near = truth.iter().any(|v| (v - m.position).norm() <= f.near_m);
                         out.push((m.value * cells, near));
                     }
                 }
