@@ -18,7 +18,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use tracker_model::{Frame, GATE_CHI2_2D, TrackSet, Vec2, ensure_positive};
+use tracker_model::{Frame, GATE_CHI2_2D, TrackSet, Vec2, ensure_non_negative, ensure_positive};
 
 use crate::config::Model;
 use crate::error::{Error, Result, invalid_parameter};
@@ -54,6 +54,19 @@ pub struct OnlineConfig {
     /// start is then kept as the window's MAP. A heuristic: the older scans of such a window
     /// are not revisited. `false` (the default) samples every window.
     pub skip_unambiguous: bool,
+    /// With `skip_unambiguous`: a second gated association (another track gating a
+    /// measurement, or another measurement in a track's gate) makes the scan ambiguous only
+    /// if its log likelihood is within this of the best association of that measurement or
+    /// track, i.e. only a rival at least e^−r as likely counts. ∞ (the default) counts every
+    /// gated rival.
+    pub rival_log_ratio: f64,
+    /// With `skip_unambiguous`: a new measurement that no track gates makes the scan
+    /// ambiguous only if a free measurement lies in its neighbourhood in one of the last
+    /// `birth_lookback` scans, with which it could start a track (a lone false alarm far
+    /// from every other free measurement changes nothing the chain would accept; a new
+    /// target's detections follow one another). 0 (the default) counts every such
+    /// measurement.
+    pub birth_lookback: usize,
     /// Independent chains per window, run in parallel from the same start, each with
     /// `samples_per_scan` samples (and its own `patience`); the best MAP among them is the
     /// window's. Chain i draws from stream i of the tracker's seed, so the output is the same
@@ -70,6 +83,8 @@ impl Default for OnlineConfig {
             coast_scans: 2,
             patience: 0,
             skip_unambiguous: false,
+            rival_log_ratio: f64::INFINITY,
+            birth_lookback: 0,
             chains: 1,
         }
     }
@@ -77,7 +92,8 @@ impl Default for OnlineConfig {
 
 impl OnlineConfig {
     /// Checks the window (at least 2 scans, the shortest a track spans), the extension gate
-    /// (finite, > 0) and the chain count (1 to 64). [`OnlineTracker::new`] calls this.
+    /// (finite, > 0), the rival ratio (≥ 0, ∞ allowed) and the chain count (1 to 64).
+    /// [`OnlineTracker::new`] calls this.
     pub fn check(&self) -> Result<()> {
         if self.window < 2 {
             return Err(invalid_parameter(
@@ -86,6 +102,9 @@ impl OnlineConfig {
             ));
         }
         ensure_positive(self.extension_gate, "extension_gate")?;
+        if self.rival_log_ratio != f64::INFINITY {
+            ensure_non_negative(self.rival_log_ratio, "rival_log_ratio")?;
+        }
         if !(1..=64).contains(&self.chains) {
             return Err(invalid_parameter(
                 "chains",
@@ -253,9 +272,8 @@ impl OnlineTracker {
                 start.insert(kept, None);
             }
         }
-        let skip = self.config.skip_unambiguous;
-        let ambiguous = extend_into_last_scan(&mut start, self.config.extension_gate, skip);
-        let (best, log_posterior) = if !skip || ambiguous || self.late_pending {
+        let ambiguous = extend_into_last_scan(&mut start, &self.config);
+        let (best, log_posterior) = if ambiguous || self.late_pending {
             let (best, log_posterior, samples) = sample_window(start, &mut self.rngs, &self.config);
             self.samples_run += samples;
             (best, log_posterior)
@@ -570,11 +588,11 @@ pub(crate) fn run_window<R: rand::Rng>(chain: &mut Chain<'_, R>, config: &Online
 }
 
 /// Greedily extends every track that can still grow into the last scan of the window, by
-/// increasing innovation cost, gated. With `check_ambiguity`, returns whether the last scan is
-/// ambiguous: one of its measurements is left free, or lies in the gate of two tracks, or a
-/// track has two gated candidates (otherwise `true`, unchecked).
-fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64, check_ambiguity: bool) -> bool {
+/// increasing innovation cost, gated by `extension_gate`. Returns whether the window needs
+/// sampling: always, unless `skip_unambiguous`; then only if [`last_scan_is_ambiguous`].
+fn extend_into_last_scan(partition: &mut Partition<'_>, config: &OnlineConfig) -> bool {
     let (model, problem, hi) = (partition.model, partition.problem, partition.hi);
+    // (−Δ log likelihood of adding m to track k, k, m) for every gated pair.
     let mut pairs: Vec<(f64, usize, MeasId)> = Vec::new();
     for (k, t) in partition.tracks.iter().enumerate() {
         let last = t.meas[t.meas.len() - 1];
@@ -588,26 +606,12 @@ fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64, check_ambigui
             }
             let node = &t.nodes[t.nodes.len() - 1];
             let (next, maha) = model.step(node, problem.position(m), gap);
-            if maha <= gate {
+            if maha <= config.extension_gate {
                 pairs.push((node.cum_log_likelihood() - next.cum_log_likelihood(), k, m));
             }
         }
     }
-    let mut ambiguous = !check_ambiguity;
-    if check_ambiguity {
-        let mut per_track: BTreeMap<usize, usize> = BTreeMap::new();
-        let mut per_meas: BTreeMap<MeasId, usize> = BTreeMap::new();
-        for &(_, k, m) in &pairs {
-            *per_track.entry(k).or_default() += 1;
-            *per_meas.entry(m).or_default() += 1;
-        }
-        if per_track.values().chain(per_meas.values()).any(|&n| n > 1) {
-            ambiguous = true;
-        }
-        if problem.scan(hi).iter().any(|m| !per_meas.contains_key(m)) {
-            ambiguous = true;
-        }
-    }
+    let ambiguous = !config.skip_unambiguous || last_scan_is_ambiguous(partition, &pairs, config);
     pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut extended: HashMap<usize, MeasId> = HashMap::new();
     let mut taken: Vec<MeasId> = Vec::new();
@@ -628,6 +632,57 @@ fn extend_into_last_scan(partition: &mut Partition<'_>, gate: f64, check_ambigui
         partition.insert(meas, Some((&old.nodes, keep)));
     }
     ambiguous
+}
+
+/// Whether the last scan leaves the chain anything to decide, given the gated `pairs`
+/// (cost, track, measurement) of the greedy extension, before it: a track or a measurement
+/// with a rival (a second gated association whose cost is within `rival_log_ratio` of its
+/// best), or a measurement no track gates with a free measurement in its neighbourhood in
+/// the last `birth_lookback` scans (any, with 0).
+fn last_scan_is_ambiguous(
+    partition: &Partition<'_>,
+    pairs: &[(f64, usize, MeasId)],
+    config: &OnlineConfig,
+) -> bool {
+    let mut best_of_track: BTreeMap<usize, f64> = BTreeMap::new();
+    let mut best_of_meas: BTreeMap<MeasId, f64> = BTreeMap::new();
+    for &(cost, k, m) in pairs {
+        let best = best_of_track.entry(k).or_insert(f64::INFINITY);
+        *best = best.min(cost);
+        let best = best_of_meas.entry(m).or_insert(f64::INFINITY);
+        *best = best.min(cost);
+    }
+    let mut close_of_track: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut close_of_meas: BTreeMap<MeasId, usize> = BTreeMap::new();
+    for &(cost, k, m) in pairs {
+        if cost <= best_of_track[&k] + config.rival_log_ratio {
+            *close_of_track.entry(k).or_default() += 1;
+        }
+        if cost <= best_of_meas[&m] + config.rival_log_ratio {
+            *close_of_meas.entry(m).or_default() += 1;
+        }
+    }
+    if close_of_track
+        .values()
+        .chain(close_of_meas.values())
+        .any(|&n| n > 1)
+    {
+        return true;
+    }
+    let could_start_a_track = |m: MeasId| {
+        config.birth_lookback == 0
+            || (1..=config.birth_lookback).any(|d| {
+                partition
+                    .predecessors(m, d)
+                    .iter()
+                    .any(|&n| partition.is_free(n))
+            })
+    };
+    partition
+        .problem
+        .scan(partition.hi)
+        .iter()
+        .any(|&m| !best_of_meas.contains_key(&m) && could_start_a_track(m))
 }
 
 /// Labels the new MAP's tracks: each takes the label of the previous track it shares the most

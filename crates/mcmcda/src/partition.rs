@@ -241,18 +241,30 @@ impl<'a> Partition<'a> {
     /// Adds a track (assumed feasible) whose first `keep` nodes are already in `nodes` (the
     /// rest is dropped and filtered anew): a move that keeps a prefix hands over the old
     /// track's buffer instead of copying it.
-    pub(crate) fn insert_into(&mut self, meas: Vec<MeasId>, mut nodes: Vec<Node>, keep: usize) {
+    pub(crate) fn insert_into(&mut self, meas: Vec<MeasId>, nodes: Vec<Node>, keep: usize) {
+        let track = self.filtered(meas, nodes, keep);
+        self.reinsert(track);
+    }
+
+    /// A track (assumed feasible) filtered from the first `keep` nodes in `nodes` and
+    /// weighed in this window, without adding it: its measurements stay as they are.
+    pub(crate) fn filtered(
+        &self,
+        meas: Vec<MeasId>,
+        mut nodes: Vec<Node>,
+        keep: usize,
+    ) -> TrackState {
         let keep = keep.min(nodes.len());
         self.model
             .filter_track(self.problem, &meas, &mut nodes, keep);
         let weight = nodes.last().map_or(0.0, |last| {
             self.model.track_weight(self.problem, &meas, last, self.hi)
         });
-        self.reinsert(TrackState {
+        TrackState {
             meas,
             nodes,
             weight,
-        });
+        }
     }
 
     /// Adds back a track removed earlier, with its cached nodes.

@@ -156,7 +156,7 @@ impl Partition<'_> {
 
     /// log of the probability that growth stops at `m`: γ, or "go on" and then find the drawn
     /// gap's candidate set empty, γ + (1 − γ) Σ_{d: C(d) = ∅} ζ(d).
-    fn log_stop_at(&self, m: MeasId, end: End) -> f64 {
+    pub(crate) fn log_stop_at(&self, m: MeasId, end: End) -> f64 {
         // All d̄ lists of m in one look-up; gaps beyond `reach` leave the window, where the
         // candidate set is empty (what `successors` and `predecessors` return there). The
         // masses are added in increasing d, as a filtered sum over 1..=d̄ would.
@@ -178,8 +178,11 @@ impl Partition<'_> {
     /// Grows a track from `start`, appending to `out`: repeat { stop with probability γ
     /// (unless this is a mandatory first step); draw d ~ ζ; C = L(y, t, d) ∩ Free; stop if
     /// C is empty; append a uniform member of C }. Towards the head, "after" reads "before"
-    /// and `out` receives measurements in growth order (backwards in time). Returns false if
-    /// a mandatory step found C empty (the move is rejected).
+    /// and `out` receives measurements in growth order (backwards in time). Returns `None` if
+    /// a mandatory step found C empty (the move is rejected), else the log probability of the
+    /// steps taken, Σ (go on) + ln ζ(d) − ln |C|, summed as
+    /// [`Partition::log_grow_probability`] sums them (to the bit): that probability is this
+    /// plus the stop term [`Partition::log_stop_at`] of the last measurement.
     pub(crate) fn grow<R: Rng + ?Sized>(
         &self,
         start: MeasId,
@@ -188,13 +191,14 @@ impl Partition<'_> {
         out: &mut Vec<MeasId>,
         candidates: &mut Vec<MeasId>,
         rng: &mut R,
-    ) -> bool {
+    ) -> Option<f64> {
         let gamma = self.model.config.stop_probability;
         let mut mandatory = first == FirstStep::Mandatory;
         let mut y = start;
+        let mut log_steps = 0.0;
         loop {
             if !mandatory && rng.random_bool(gamma) {
-                return true;
+                return Some(log_steps);
             }
             let d = self.sample_gap(rng);
             candidates.clear();
@@ -205,10 +209,14 @@ impl Partition<'_> {
                     .filter(|&n| self.is_free(n)),
             );
             if candidates.is_empty() {
-                return !mandatory;
+                return (!mandatory).then_some(log_steps);
             }
             y = candidates[rng.random_range(0..candidates.len())];
             out.push(y);
+            if !mandatory {
+                log_steps += self.model.log_go_on;
+            }
+            log_steps += self.model.log_zeta[d - 1] - ln_count(candidates.len());
             mandatory = false;
         }
     }
@@ -344,15 +352,27 @@ impl Partition<'_> {
     /// log q of a switch of (τ_a, p) with (τ_b, q) in this partition: the pair can be drawn
     /// from either end (track, position, then partner).
     pub(crate) fn log_switch_probability(&self, a: usize, p: usize, b: usize, q: usize) -> f64 {
+        let (n_a, n_b) = (
+            self.switch_partner_count(a, p),
+            self.switch_partner_count(b, q),
+        );
+        self.log_switch_probability_given(a, n_a, b, n_b)
+    }
+
+    /// [`Self::log_switch_probability`] with the partner counts of the two ends given.
+    pub(crate) fn log_switch_probability_given(
+        &self,
+        a: usize,
+        n_a: usize,
+        b: usize,
+        n_b: usize,
+    ) -> f64 {
         let k = self.n_tracks() as f64;
-        let end = |t: usize, pos: usize| {
-            let n = self.switch_partner_count(t, pos) as f64;
-            1.0 / ((self.tracks[t].meas.len() - 1) as f64 * n)
-        };
+        let end = |t: usize, n: usize| 1.0 / ((self.tracks[t].meas.len() - 1) as f64 * n as f64);
         self.model
             .log_move_probability(Move::Switch, self.n_tracks())
             - k.ln()
-            + (end(a, p) + end(b, q)).ln()
+            + (end(a, n_a) + end(b, n_b)).ln()
     }
 
     /// log q(τ → τ') for the moves that change one track and keep K (extension, reduction,

@@ -48,6 +48,32 @@ enum Outcome {
     Rejected,
 }
 
+/// What an upper bound of the log Metropolis-Hastings ratio settled
+/// ([`Chain::draw_against_bound`]).
+enum Bounded {
+    /// ln u ≥ the bound: rejected whatever the exact ratio.
+    Rejected,
+    /// The exact ratio decides, with ln u if it was drawn already.
+    Undecided { log_u: Option<f64> },
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Tests switch off the rejection against a bound, to compare with the exact ratio.
+    pub(crate) static BOUNDED_REJECTION: std::cell::Cell<bool> = const { std::cell::Cell::new(true) };
+    /// How often a move was rejected against its bound (tests check the case is exercised).
+    pub(crate) static BOUNDED_REJECTIONS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+}
+
+/// Tests: a bound of the log ratio must hold for the exact ratio.
+#[cfg(test)]
+fn check_bound(bound: f64, exact: f64) {
+    assert!(
+        exact.is_nan() || exact <= bound + 1e-9,
+        "the bound {bound} is below the log ratio {exact}"
+    );
+}
+
 /// One Markov chain: its current partition, generator, MAP and statistics.
 pub struct Chain<'a, R> {
     state: Partition<'a>,
@@ -179,6 +205,18 @@ impl<'a, R: Rng> Chain<'a, R> {
 
     /// Metropolis-Hastings acceptance of a change of the log posterior by `delta`.
     fn accept(&mut self, delta: f64, log_q_forward: f64, log_q_reverse: f64) -> bool {
+        self.accept_drawn(delta, log_q_forward, log_q_reverse, None)
+    }
+
+    /// [`Self::accept`] with ln u already drawn (by [`Self::draw_against_bound`]) or not;
+    /// u is drawn only when the log ratio is below 0.
+    fn accept_drawn(
+        &mut self,
+        delta: f64,
+        log_q_forward: f64,
+        log_q_reverse: f64,
+        log_u: Option<f64>,
+    ) -> bool {
         let log_ratio = delta + log_q_reverse - log_q_forward;
         #[cfg(test)]
         {
@@ -192,12 +230,36 @@ impl<'a, R: Rng> Chain<'a, R> {
         if log_ratio.is_nan() {
             return false;
         }
-        if log_ratio >= 0.0 || self.rng.random::<f64>().ln() < log_ratio {
+        if log_ratio >= 0.0 || log_u.unwrap_or_else(|| self.rng.random::<f64>().ln()) < log_ratio {
             self.log_posterior += delta;
             true
         } else {
             false
         }
+    }
+
+    /// Settles what an upper `bound` of the log Metropolis-Hastings ratio can before the
+    /// ratio itself is evaluated. Below 0 the ratio is negative too, so [`Self::accept`]
+    /// would draw u: it is drawn now, and ln u ≥ bound rejects the move at once (the same
+    /// decision, from the same draw, as the exact ratio would give). Otherwise nothing is
+    /// drawn.
+    fn draw_against_bound(&mut self, bound: f64) -> Bounded {
+        #[cfg(test)]
+        if self.force_accept || !BOUNDED_REJECTION.with(std::cell::Cell::get) {
+            return Bounded::Undecided { log_u: None };
+        }
+        // A margin far above the rounding of sums of a few hundred terms.
+        let bound = bound + 1e-6;
+        if bound < 0.0 {
+            let log_u = self.rng.random::<f64>().ln();
+            if log_u >= bound {
+                #[cfg(test)]
+                BOUNDED_REJECTIONS.with(|n| n.set(n.get() + 1));
+                return Bounded::Rejected;
+            }
+            return Bounded::Undecided { log_u: Some(log_u) };
+        }
+        Bounded::Undecided { log_u: None }
     }
 
     fn birth(&mut self) -> Outcome {
@@ -232,17 +294,36 @@ impl<'a, R: Rng> Chain<'a, R> {
         if self.candidates.is_empty() {
             return Outcome::Rejected;
         }
-        let y2 = self.candidates[self.rng.random_range(0..self.candidates.len())];
-        let mut track = vec![y1, y2];
-        s.grow(
-            y2,
-            End::Tail,
-            FirstStep::MayStop,
-            &mut track,
-            &mut self.candidates,
-            &mut self.rng,
+        let n_second = self.candidates.len();
+        let y2 = self.candidates[self.rng.random_range(0..n_second)];
+        // Room for a typical track's growth without reallocating.
+        let mut track = Vec::with_capacity(16);
+        track.extend([y1, y2]);
+        let log_steps = s
+            .grow(
+                y2,
+                End::Tail,
+                FirstStep::MayStop,
+                &mut track,
+                &mut self.candidates,
+                &mut self.rng,
+            )
+            .unwrap_or(f64::NEG_INFINITY);
+        // q of this birth from the draws just made (the terms of `log_birth_probability`,
+        // summed in its order, so equal to it to the bit), instead of recounting every
+        // candidate set: only the stop at the last measurement is evaluated.
+        let log_grow = log_steps + s.log_stop_at(track[track.len() - 1], End::Tail);
+        let log_q_forward = s.model.log_move_probability(Move::Birth, s.n_tracks())
+            - ln_count(n_scans - 1)
+            + s.model.log_zeta[d1 - 1]
+            - ln_count(n_births)
+            - ln_count(n_second)
+            + log_grow;
+        #[cfg(test)]
+        assert_eq!(
+            log_q_forward.to_bits(),
+            s.log_birth_probability(&track).to_bits()
         );
-        let log_q_forward = s.log_birth_probability(&track);
         let k_new = s.n_tracks() + 1;
         let log_q_reverse = s.model.log_move_probability(Move::Death, k_new) - ln_count(k_new);
         self.state.insert(track, None);
@@ -260,13 +341,24 @@ impl<'a, R: Rng> Chain<'a, R> {
         let victim = self.rng.random_range(0..k);
         let log_q_forward = self.state.model.log_move_probability(Move::Death, k) - ln_count(k);
         let old = self.state.remove(victim);
-        let log_q_reverse = self.state.log_birth_probability(&old.meas);
-        if self.accept(-old.weight, log_q_forward, log_q_reverse) {
-            Outcome::Accepted
-        } else {
-            self.state.reinsert(old);
-            Outcome::Rejected
+        // The reverse birth's q is at most ξ(birth) · 1/(T − 1) · ζ(d₁) (its candidate
+        // counts are ≥ 1 and its growth a probability): evaluated only if that can accept.
+        let s = &self.state;
+        let d1 = s.problem.scan_of(old.meas[1]) - s.problem.scan_of(old.meas[0]);
+        let log_q_reverse_at_most = s.model.log_move_probability(Move::Birth, k - 1)
+            - ln_count(s.n_scans() - 1)
+            + s.model.log_zeta[d1 - 1];
+        let bound = -old.weight + log_q_reverse_at_most - log_q_forward;
+        if let Bounded::Undecided { log_u } = self.draw_against_bound(bound) {
+            let log_q_reverse = self.state.log_birth_probability(&old.meas);
+            #[cfg(test)]
+            check_bound(bound, -old.weight + log_q_reverse - log_q_forward);
+            if self.accept_drawn(-old.weight, log_q_forward, log_q_reverse, log_u) {
+                return Outcome::Accepted;
+            }
         }
+        self.state.reinsert(old);
+        Outcome::Rejected
     }
 
     fn split(&mut self) -> Outcome {
@@ -308,18 +400,28 @@ impl<'a, R: Rng> Chain<'a, R> {
         self.state.insert(tail, None);
         let s = &self.state;
         let head_index = k - 1;
-        let log_q_reverse = s.model.log_move_probability(Move::Merge, k + 1)
-            - ln_count(k + 1)
-            - ln_count(s.merge_partner_count(head_index));
+        // The reverse merge's q is at most ξ(merge) / (K + 1) (the head has ≥ 1 partner, the
+        // tail): its partner count is taken only if that can accept.
+        let log_q_reverse_at_most =
+            s.model.log_move_probability(Move::Merge, k + 1) - ln_count(k + 1);
         let delta = s.tracks[k - 1].weight + s.tracks[k].weight - old.weight;
-        if !handed_over {
-            return self.finish_replacing(delta, log_q_forward, log_q_reverse, 2, vec![old]);
+        let bound = delta + log_q_reverse_at_most - log_q_forward;
+        if let Bounded::Undecided { log_u } = self.draw_against_bound(bound) {
+            let log_q_reverse =
+                log_q_reverse_at_most - ln_count(self.state.merge_partner_count(head_index));
+            #[cfg(test)]
+            check_bound(bound, delta + log_q_reverse - log_q_forward);
+            if self.accept_drawn(delta, log_q_forward, log_q_reverse, log_u) {
+                return Outcome::Accepted;
+            }
         }
-        if self.accept(delta, log_q_forward, log_q_reverse) {
-            return Outcome::Accepted;
-        }
-        // As `finish_replacing`: the new tracks go (last first), the old one comes back.
+        // The new tracks go (last first), the old one comes back.
         self.state.remove(k);
+        if !handed_over {
+            self.state.remove(k - 1);
+            self.state.reinsert(old);
+            return Outcome::Rejected;
+        }
         let mut nodes = self.state.remove(k - 1).nodes;
         nodes.truncate(keep);
         nodes.extend_from_slice(&self.saved_nodes);
@@ -348,7 +450,8 @@ impl<'a, R: Rng> Chain<'a, R> {
         let log_q_forward =
             s.model.log_move_probability(Move::Merge, k) - ln_count(k) - ln_count(n_partners);
         let (mut a, b) = self.remove_pair(first, second);
-        let mut joined = a.meas.clone();
+        let mut joined = Vec::with_capacity(a.meas.len() + b.meas.len());
+        joined.extend_from_slice(&a.meas);
         joined.extend_from_slice(&b.meas);
         // The joined track keeps all of a's nodes: it takes over a's buffer (no copy of a
         // long track), and a rejection cuts it back to them.
@@ -365,7 +468,7 @@ impl<'a, R: Rng> Chain<'a, R> {
         if self.accept(delta, log_q_forward, log_q_reverse) {
             return Outcome::Accepted;
         }
-        // As `finish_replacing`: the joined track goes, a and b come back in that order.
+        // As `restore`: the joined track goes, a and b come back in that order.
         let mut nodes = self.state.remove(k - 2).nodes;
         nodes.truncate(keep);
         a.nodes = nodes;
@@ -376,13 +479,17 @@ impl<'a, R: Rng> Chain<'a, R> {
 
     /// Extension, reduction or update of one track at its tail or (mirrored in time) its
     /// head; K is unchanged and q sums over every way of producing the new track.
+    ///
+    /// The new track is filtered first, and the two q, which dominate the move's cost, are
+    /// evaluated only if the move can still be accepted: q(ω → ω') is at least the
+    /// probability of the way the move just took, and q(ω' → ω) at most
+    /// (ξ(extension) + ξ(reduction) + ξ(update)) / K, which bound the Metropolis-Hastings
+    /// log ratio from above ([`Self::draw_against_bound`]).
     fn single_track(&mut self, m: Move) -> Outcome {
         let k = self.state.n_tracks();
         let victim = self.rng.random_range(0..k);
-        let end = if self
-            .rng
-            .random_bool(self.state.model.config.head_probability)
-        {
+        let head = self.state.model.config.head_probability;
+        let end = if self.rng.random_bool(head) {
             End::Head
         } else {
             End::Tail
@@ -397,44 +504,55 @@ impl<'a, R: Rng> Chain<'a, R> {
         }
         let len = from.len();
         self.grown.clear();
+        // ln of the probability of the way taken, the stop apart: the end, the move, the
+        // kept part, and the growth steps.
+        let log_end = match end {
+            End::Head => head.ln(),
+            End::Tail => (-head).ln_1p(),
+        };
+        let log_way = log_end + self.state.model.log_move_probability(m, k);
+        let gamma = self.state.model.config.stop_probability;
         let proposed = match m {
             Move::Extension => {
                 self.grown.extend_from_slice(&from);
-                self.state.grow(
-                    from[len - 1],
-                    end,
-                    FirstStep::MayStop,
-                    &mut self.grown,
-                    &mut self.candidates,
-                    &mut self.rng,
-                );
-                true
+                self.state
+                    .grow(
+                        from[len - 1],
+                        end,
+                        FirstStep::MayStop,
+                        &mut self.grown,
+                        &mut self.candidates,
+                        &mut self.rng,
+                    )
+                    .map(|steps| log_way + steps + gamma.ln())
             }
             Move::Reduction if len >= 3 => {
                 let r = self.rng.random_range(2..len);
                 self.grown.extend_from_slice(&from[..r]);
-                true
+                Some(log_way - ln_count(len - 2))
             }
             Move::Update => {
                 let r = self.rng.random_range(1..=len);
                 self.grown.extend_from_slice(&from[..r]);
-                self.state.grow(
-                    from[r - 1],
-                    end,
-                    FirstStep::of_update(r),
-                    &mut self.grown,
-                    &mut self.candidates,
-                    &mut self.rng,
-                )
+                self.state
+                    .grow(
+                        from[r - 1],
+                        end,
+                        FirstStep::of_update(r),
+                        &mut self.grown,
+                        &mut self.candidates,
+                        &mut self.rng,
+                    )
+                    .map(|steps| log_way - ln_count(len) + steps + gamma.ln())
             }
-            _ => false,
+            _ => None,
         };
         let unchanged = self.grown == from;
         self.from = from;
-        if !proposed {
+        let Some(log_q_forward_at_least) = proposed else {
             self.state.reinsert(old);
             return Outcome::Rejected;
-        }
+        };
         if unchanged {
             self.state.reinsert(old);
             return Outcome::Accepted;
@@ -443,8 +561,6 @@ impl<'a, R: Rng> Chain<'a, R> {
         if end == End::Head {
             new.reverse();
         }
-        let log_q_forward = self.state.log_single_track_probability(k, &old.meas, &new);
-        let log_q_reverse = self.state.log_single_track_probability(k, &new, &old.meas);
         let keep = old
             .meas
             .iter()
@@ -452,29 +568,55 @@ impl<'a, R: Rng> Chain<'a, R> {
             .take_while(|(a, b)| a == b)
             .count();
         let keep = self.state.model.reusable_prefix(keep.min(old.nodes.len()));
-        if keep < old.nodes.len() - keep {
-            // Most of the track changes (a head move): copy the short kept prefix.
-            self.state.insert(new, Some((&old.nodes, keep)));
-            let delta = self.state.tracks[k - 1].weight - old.weight;
-            return self.finish_replacing(delta, log_q_forward, log_q_reverse, 1, vec![old]);
-        }
         // Most of the track is kept: the new track takes over the old one's filtered nodes
-        // (no copy of the kept prefix, which is most of a long track); the nodes it
-        // overwrites are saved, so that a rejection puts the old track back exactly.
+        // (no copy of the kept prefix, which is most of a long track), and the nodes it
+        // overwrites are saved, so that a rejection puts the old track back exactly. Else
+        // (a head move changes most of it) the short kept prefix is copied.
         let mut old = old;
-        self.saved_nodes.clear();
-        self.saved_nodes.extend_from_slice(&old.nodes[keep..]);
-        let nodes = std::mem::take(&mut old.nodes);
-        self.state.insert_into(new, nodes, keep);
-        let delta = self.state.tracks[k - 1].weight - old.weight;
-        if self.accept(delta, log_q_forward, log_q_reverse) {
-            return Outcome::Accepted;
+        let handed_over = keep >= old.nodes.len() - keep;
+        let nodes = if handed_over {
+            self.saved_nodes.clear();
+            self.saved_nodes.extend_from_slice(&old.nodes[keep..]);
+            std::mem::take(&mut old.nodes)
+        } else {
+            let mut nodes = Vec::with_capacity(new.len());
+            nodes.extend_from_slice(&old.nodes[..keep]);
+            nodes
+        };
+        let candidate = self.state.filtered(new, nodes, keep);
+        let delta = candidate.weight - old.weight;
+        let model = self.state.model;
+        let log_q_reverse_at_most = (model.move_probability(Move::Extension, k)
+            + model.move_probability(Move::Reduction, k)
+            + model.move_probability(Move::Update, k))
+        .ln();
+        // The −ln K of both q cancels in the bound.
+        let bound = delta + log_q_reverse_at_most - log_q_forward_at_least;
+        let rejected = match self.draw_against_bound(bound) {
+            Bounded::Rejected => candidate,
+            Bounded::Undecided { log_u } => {
+                // Both q in the partition without the track.
+                let log_q_forward =
+                    self.state
+                        .log_single_track_probability(k, &old.meas, &candidate.meas);
+                let log_q_reverse =
+                    self.state
+                        .log_single_track_probability(k, &candidate.meas, &old.meas);
+                #[cfg(test)]
+                check_bound(bound, delta + log_q_reverse - log_q_forward);
+                self.state.reinsert(candidate);
+                if self.accept_drawn(delta, log_q_forward, log_q_reverse, log_u) {
+                    return Outcome::Accepted;
+                }
+                self.state.remove(k - 1)
+            }
+        };
+        if handed_over {
+            let mut nodes = rejected.nodes;
+            nodes.truncate(keep);
+            nodes.extend_from_slice(&self.saved_nodes);
+            old.nodes = nodes;
         }
-        let rejected = self.state.remove(k - 1);
-        let mut nodes = rejected.nodes;
-        nodes.truncate(keep);
-        nodes.extend_from_slice(&self.saved_nodes);
-        old.nodes = nodes;
         self.state.reinsert(old);
         // The rejected track's buffer holds the next proposal.
         self.grown = rejected.meas;
@@ -499,18 +641,33 @@ impl<'a, R: Rng> Chain<'a, R> {
             }
             i += 1;
         });
-        let log_q_forward = s.log_switch_probability(a, p, b, q);
+        let log_q_forward =
+            s.log_switch_probability_given(a, n_partners, b, s.switch_partner_count(b, q));
         let (ta, tb) = self.remove_pair(a, b);
-        let mut new_a = ta.meas[..=p].to_vec();
+        let mut new_a = Vec::with_capacity(p + tb.meas.len() - q);
+        new_a.extend_from_slice(&ta.meas[..=p]);
         new_a.extend_from_slice(&tb.meas[q + 1..]);
-        let mut new_b = tb.meas[..=q].to_vec();
+        let mut new_b = Vec::with_capacity(q + ta.meas.len() - p);
+        new_b.extend_from_slice(&tb.meas[..=q]);
         new_b.extend_from_slice(&ta.meas[p + 1..]);
         self.state.insert(new_a, Some((&ta.nodes, p + 1)));
         self.state.insert(new_b, Some((&tb.nodes, q + 1)));
         let s = &self.state;
-        let log_q_reverse = s.log_switch_probability(k - 2, p, k - 1, q);
         let delta = s.tracks[k - 2].weight + s.tracks[k - 1].weight - ta.weight - tb.weight;
-        self.finish_replacing(delta, log_q_forward, log_q_reverse, 2, vec![ta, tb])
+        // The reverse switch's q is at most its value with one partner at each end: the
+        // partners are counted only if that can accept.
+        let log_q_reverse_at_most = s.log_switch_probability_given(k - 2, 1, k - 1, 1);
+        let bound = delta + log_q_reverse_at_most - log_q_forward;
+        if let Bounded::Undecided { log_u } = self.draw_against_bound(bound) {
+            let log_q_reverse = self.state.log_switch_probability(k - 2, p, k - 1, q);
+            #[cfg(test)]
+            check_bound(bound, delta + log_q_reverse - log_q_forward);
+            if self.accept_drawn(delta, log_q_forward, log_q_reverse, log_u) {
+                return Outcome::Accepted;
+            }
+        }
+        self.restore(2, [ta, tb]);
+        Outcome::Rejected
     }
 
     /// Removes tracks `i` and `j` (i ≠ j), returned in that order.
@@ -527,19 +684,9 @@ impl<'a, R: Rng> Chain<'a, R> {
         }
     }
 
-    /// Accepts, or undoes the move: removes the `n_new` tracks just inserted (the last ones)
-    /// and puts `old` back.
-    fn finish_replacing(
-        &mut self,
-        delta: f64,
-        log_q_forward: f64,
-        log_q_reverse: f64,
-        n_new: usize,
-        old: Vec<TrackState>,
-    ) -> Outcome {
-        if self.accept(delta, log_q_forward, log_q_reverse) {
-            return Outcome::Accepted;
-        }
+    /// Undoes a rejected move: removes the `n_new` tracks just inserted (the last ones) and
+    /// puts `old` back.
+    fn restore<const N: usize>(&mut self, n_new: usize, old: [TrackState; N]) {
         for _ in 0..n_new {
             let last = self.state.n_tracks() - 1;
             self.state.remove(last);
@@ -547,7 +694,6 @@ impl<'a, R: Rng> Chain<'a, R> {
         for t in old {
             self.state.reinsert(t);
         }
-        Outcome::Rejected
     }
 }
 

@@ -1846,6 +1846,69 @@ fn single_track_q_stops_early_with_the_full_sums_bits() {
     assert!(stops > 20, "the sums stopped early only {stops} times");
 }
 
+/// Rejection against a bound of the Metropolis-Hastings ratio (sampler.rs,
+/// `draw_against_bound`) is exact: on four walkers close together with clutter, at every head
+/// probability, a chain that rejects against the bounds takes the same path as one that
+/// evaluates every ratio (same MAP, log posterior and move statistics, to the bit), the bounds
+/// rejected many moves, and with them off every proposal's bound was checked against its exact
+/// ratio (`check_bound`, which panics if one is below).
+#[test]
+fn bounded_rejection_takes_the_exact_ratios_path() {
+    use crate::sampler::{BOUNDED_REJECTION, BOUNDED_REJECTIONS};
+    use rand::RngExt;
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let (scans, _) = walker_scans(
+        &mut rng,
+        (20, 4, 0.8),
+        |w, t| (50.0 * w + 6.0 * t, 40.0 * w + (w - 1.5) * 4.0 * t),
+        |rng| {
+            (0..rng.random_range(0..3))
+                .map(|_| (rng.random_range(0.0..300.0), rng.random_range(0.0..300.0)))
+                .collect()
+        },
+    );
+    for head_probability in [0.0, 0.3, 1.0] {
+        let model = McmcdaConfig {
+            max_speed: 30.0,
+            max_gap: 4,
+            head_probability,
+            ..McmcdaConfig::default()
+        }
+        .check()
+        .unwrap();
+        let problem = Problem::from_scans(&model, &scans).unwrap();
+        let window = problem.all_scans().unwrap();
+        let run = |bounded: bool| {
+            BOUNDED_REJECTION.with(|b| b.set(bounded));
+            let start = Partition::empty(&model, &problem, window.clone()).unwrap();
+            let mut chain = Chain::new(start, ChaCha8Rng::seed_from_u64(4));
+            chain.run(20_000);
+            BOUNDED_REJECTION.with(|b| b.set(true));
+            let (map, log_posterior) = chain.map();
+            (
+                map.to_vec(),
+                log_posterior.to_bits(),
+                chain.state().log_posterior().to_bits(),
+                *chain.stats(),
+            )
+        };
+        let before = BOUNDED_REJECTIONS.with(std::cell::Cell::get);
+        let bounded = run(true);
+        let rejected = BOUNDED_REJECTIONS.with(std::cell::Cell::get) - before;
+        let exact = run(false);
+        assert_eq!(bounded, exact, "head probability {head_probability}");
+        assert!(
+            rejected > 2_000,
+            "only {rejected} of 20,000 moves rejected against their bound"
+        );
+        assert!(
+            bounded.3.accepted.iter().sum::<u64>() > 500,
+            "{:?}",
+            bounded.3
+        );
+    }
+}
+
 /// Runs the online tracker over `scans` (plus `extra` points at some frames) and returns the
 /// final associations as sorted position lists, with the samples drawn.
 fn online_run(
@@ -1957,6 +2020,86 @@ fn online_skip_unambiguous_samples_only_the_ambiguous_scans() {
     let mut lengths: Vec<usize> = result.associations.iter().map(|(_, t)| t.len()).collect();
     lengths.sort_unstable();
     assert_eq!(lengths, vec![29, 30, 30]);
+}
+
+/// The two refinements of `skip_unambiguous`. `rival_log_ratio`: two walkers 30 apart (σ = 10)
+/// side by side, each measurement in both gates but far likelier on its own walker's track:
+/// every gated rival makes every scan ambiguous, a ratio of 1 counts none of them, and the
+/// tracks are the same. `birth_lookback`: a lone false point far from everything needs no
+/// sample, but a second one next to it a scan later (they could start a track) does.
+#[test]
+fn online_skip_counts_close_rivals_and_free_points_that_could_start_a_track() {
+    use crate::OnlineConfig;
+    let side_by_side: Vec<Scan> = (0..30u32)
+        .map(|f| {
+            let x = 100.0 + 20.0 * f64::from(f);
+            scan(f, &[(x, 300.0), (x, 330.0)])
+        })
+        .collect();
+    let every_rival = OnlineConfig {
+        window: 6,
+        samples_per_scan: 500,
+        skip_unambiguous: true,
+        ..OnlineConfig::default()
+    };
+    let close_rivals = OnlineConfig {
+        rival_log_ratio: 1.0,
+        ..every_rival
+    };
+    let (tracks, samples) = online_run(&side_by_side, &[], every_rival);
+    assert_eq!(tracks.len(), 2);
+    assert!(tracks.iter().all(|t| t.len() == 30), "{tracks:?}");
+    assert!(samples >= 25 * 500, "{samples} samples");
+    // Sampled: scans 0 and 1 (no track yet) and scan 2, where the two-point tracks'
+    // velocities are too uncertain to tell the walkers apart.
+    assert_eq!(
+        online_run(&side_by_side, &[], close_rivals),
+        (tracks, 3 * 500)
+    );
+
+    let scans = three_walkers(30, &[]);
+    let lookback = OnlineConfig {
+        birth_lookback: 2,
+        ..every_rival
+    };
+    // Only scan 1 is sampled: scan 0's points have nothing before them to start a track with.
+    let (tracks, samples) = online_run(&scans, &[], lookback);
+    assert_eq!(samples, 500);
+    assert_eq!(tracks, online_run(&scans, &[], every_rival).0);
+    let lone = [(15, Vector2::new(3000.0, 3000.0))];
+    assert_eq!(online_run(&scans, &lone, lookback), (tracks.clone(), 500));
+    assert_eq!(online_run(&scans, &lone, every_rival).1, 3 * 500);
+    let pair = [
+        (15, Vector2::new(3000.0, 3000.0)),
+        (16, Vector2::new(3020.0, 3000.0)),
+    ];
+    let (with_pair, samples) = online_run(&scans, &pair, lookback);
+    assert_eq!(samples, 2 * 500);
+    assert!(
+        tracks.iter().all(|t| with_pair.contains(t)),
+        "{with_pair:?}"
+    );
+}
+
+/// The online settings are checked: a rival ratio must be ≥ 0 (∞ allowed).
+#[test]
+fn online_rival_log_ratio_is_checked() {
+    use crate::OnlineConfig;
+    for bad in [-1.0, f64::NAN, f64::NEG_INFINITY] {
+        let config = OnlineConfig {
+            rival_log_ratio: bad,
+            ..OnlineConfig::default()
+        };
+        let err = config.check().unwrap_err().to_string();
+        assert!(err.contains("rival_log_ratio"), "{err}");
+    }
+    for good in [0.0, 4.0, f64::INFINITY] {
+        let config = OnlineConfig {
+            rival_log_ratio: good,
+            ..OnlineConfig::default()
+        };
+        config.check().unwrap();
+    }
 }
 
 /// Every neighbour list against brute force: `forward(m, d)` holds exactly the measurements of

@@ -247,6 +247,8 @@ fn online_base() -> OnlineConfig {
         chains: 2,
         samples_per_scan: 1000,
         skip_unambiguous: true,
+        rival_log_ratio: 4.0,
+        birth_lookback: 2,
         ..OnlineConfig::default()
     }
 }
@@ -692,6 +694,14 @@ const KEY_COMMENTS: [(&str, &[(&str, &str)]); 9] = [
             (
                 "skip_unambiguous",
                 "draw no sample at a frame whose every detection extends the only track gating it",
+            ),
+            (
+                "rival_log_ratio",
+                "with skip_unambiguous: a second gated association makes a frame ambiguous only if its log likelihood is within this of the best (inf = any)",
+            ),
+            (
+                "birth_lookback",
+                "with skip_unambiguous: a detection no track gates makes a frame ambiguous only if a free detection lies in its neighbourhood in the last this many frames (0 = always)",
             ),
             (
                 "chains",
