@@ -124,22 +124,35 @@ fn fitted_summary(tracker: Tracker, c: &scenarios::track::EffectiveConfig) -> St
             "p_d {:.3}, clutter {:.3}/frame, births {:.4}/frame",
             c.phd.p_detect, c.phd.clutter_rate, c.phd.birth_rate
         ),
-        _ => format!(
-            "fitted p_d {:.3}, clutter {:.3}/frame, births {:.4}/frame, R diag [{:.2}, {:.2}] px², \
+        _ => {
+            format!(
+                "fitted p_d {:.3}, clutter {:.3}/frame, births {:.4}/frame, R diag [{:.2}, {:.2}] px², \
              q {:.3} px²/frame⁴, v̄ {:.1} px/frame, d̄ {} frames; {}",
-            m.p_detect,
-            m.clutter_per_scan,
-            m.births_per_scan,
-            m.measurement_noise[(0, 0)],
-            m.measurement_noise[(1, 1)],
-            q,
-            m.max_speed,
-            m.max_gap,
-            c.score_model
-                .as_ref()
-                .map_or_else(|| "scores unused".to_string(), |s| s.summary())
-        ),
+                m.p_detect,
+                m.clutter_per_scan,
+                m.births_per_scan,
+                m.measurement_noise[(0, 0)],
+                m.measurement_noise[(1, 1)],
+                q,
+                m.max_speed,
+                m.max_gap,
+                c.score_model
+                    .as_ref()
+                    .map_or_else(|| "scores unused".to_string(), |s| s.summary())
+            ) + &dropped(c)
+        }
     }
+}
+
+/// GNN's detections dropped below `[scores] gnn_min_log_ratio`, if any.
+fn dropped(c: &scenarios::track::EffectiveConfig) -> String {
+    if c.gnn_dropped == 0 {
+        return String::new();
+    }
+    format!(
+        "; {} detections with ln f₁/f₀ < {} dropped and the model fitted to the rest",
+        c.gnn_dropped, c.scores.gnn_min_log_ratio
+    )
 }
 
 /// `cargo xtask walkers`: writes `OUT-det.txt` and `OUT-gt.txt`.

@@ -19,6 +19,7 @@
 //! (`phd_filter::SmcPhd::step_after`); a frame number with no row is a frame in which the
 //! detector found nothing.
 
+use std::borrow::Cow;
 use std::fmt;
 use std::str::FromStr;
 
@@ -193,6 +194,13 @@ pub struct ScoreConfig {
     pub enabled: bool,
     /// The largest |ln f₁(s)/f₀(s)| a score contributes.
     pub max_log_ratio: f64,
+    /// GNN and online GNN drop the detections whose fitted ln f₁(s)/f₀(s) is below this, and
+    /// fit the model again to the rest, where the file's scores give a [`ScoreModel`].
+    /// GNN decides every association at once and starts a track from any two detections,
+    /// so a false box it takes costs a false positive or a switch that its cost cannot weigh
+    /// by score; MCMCDA weighs each detection's score in the posterior and drops none. −∞
+    /// keeps every detection.
+    pub gnn_min_log_ratio: f64,
 }
 
 impl Default for ScoreConfig {
@@ -200,17 +208,24 @@ impl Default for ScoreConfig {
         Self {
             enabled: true,
             max_log_ratio: 3.0,
+            gnn_min_log_ratio: GNN_MIN_LOG_RATIO,
         }
     }
 }
 
 impl ScoreConfig {
-    /// Checks the bound (finite, ≥ 0).
+    /// Checks the bound (finite, ≥ 0) and GNN's threshold (not NaN, −∞ allowed).
     pub fn check(&self) -> Result<()> {
         if !(self.max_log_ratio.is_finite() && self.max_log_ratio >= 0.0) {
             bail!(
                 "max_log_ratio = {}; it must be finite and ≥ 0",
                 self.max_log_ratio
+            );
+        }
+        if self.gnn_min_log_ratio.is_nan() || self.gnn_min_log_ratio == f64::INFINITY {
+            bail!(
+                "gnn_min_log_ratio = {}; it must be a number below ∞ (-inf keeps every detection)",
+                self.gnn_min_log_ratio
             );
         }
         Ok(())
@@ -255,6 +270,9 @@ fn online_base() -> OnlineConfig {
 
 /// Points of the tabulated score ratio.
 const SCORE_GRID: usize = 64;
+
+/// GNN's default `[scores] gnn_min_log_ratio`.
+const GNN_MIN_LOG_RATIO: f64 = -2.0;
 
 impl ScoreModel {
     /// ln f₁(s)/f₀(s), linear between the grid points (constant beyond the file's range).
@@ -340,6 +358,10 @@ pub struct EffectiveConfig {
     /// scores do not vary or are too few); not a key of the configuration.
     #[serde(skip)]
     pub score_model: Option<ScoreModel>,
+    /// The detections GNN and online GNN dropped below `[scores] gnn_min_log_ratio` (the
+    /// model above was fitted to the rest); not a key of the configuration.
+    #[serde(skip)]
+    pub gnn_dropped: usize,
     /// The online MCMCDA tracker (`[online]`).
     pub online: OnlineConfig,
     /// GNN (`[gnn]`).
@@ -482,6 +504,7 @@ impl TrackConfig {
             boxes: self.boxes,
             scores: self.scores,
             score_model,
+            gnn_dropped: 0,
             online,
             gnn,
             phd,
@@ -501,13 +524,43 @@ pub fn track_detections(
     if rows.is_empty() {
         bail!("no detections");
     }
-    let config = settings.resolve_for(rows, tracker)?;
+    let (config, rows) = resolve_rows(settings, rows, tracker)?;
     match tracker {
-        Tracker::Phd => track_boxes_phd(rows, &config, seed),
+        Tracker::Phd => track_boxes_phd(&rows, &config, seed),
         Tracker::Mcmcda | Tracker::McmcdaOnline | Tracker::Gnn | Tracker::GnnOnline => {
-            track_points(tracker, rows, &config, seed)
+            track_points(tracker, &rows, &config, seed)
         }
     }
+}
+
+/// The configuration `tracker` runs with on `rows`, and the detections it tracks: GNN and
+/// online GNN drop those whose fitted score ratio is below `[scores] gnn_min_log_ratio` and
+/// are fitted again to the rest (when the file's scores give a score model and the threshold
+/// drops some, but not all, of them).
+fn resolve_rows<'a>(
+    settings: &TrackConfig,
+    rows: &'a [MotRow],
+    tracker: Tracker,
+) -> Result<(EffectiveConfig, Cow<'a, [MotRow]>)> {
+    let config = settings.resolve_for(rows, tracker)?;
+    let Some(scores) = config.score_model.as_ref() else {
+        return Ok((config, Cow::Borrowed(rows)));
+    };
+    if !matches!(tracker, Tracker::Gnn | Tracker::GnnOnline) {
+        return Ok((config, Cow::Borrowed(rows)));
+    }
+    let min = config.scores.gnn_min_log_ratio;
+    let kept: Vec<MotRow> = rows
+        .iter()
+        .filter(|r| scores.log_ratio(r.confidence) >= min)
+        .cloned()
+        .collect();
+    if kept.len() == rows.len() || kept.is_empty() {
+        return Ok((config, Cow::Borrowed(rows)));
+    }
+    let mut refitted = settings.resolve_for(&kept, tracker)?;
+    refitted.gnn_dropped = rows.len() - kept.len();
+    Ok((refitted, Cow::Owned(kept)))
 }
 
 /// [`track_detections`], or, given a folder of `frames`, the PHD tracker fused with image local
@@ -528,16 +581,19 @@ pub fn track_detections_with_frames(
         bail!("no detections");
     }
     let fused = crate::track_frames::FusedSettings::default();
-    let config = match frames {
-        Some(_) => crate::track_frames::fused_config(settings, rows, &fused)?,
-        None => settings.resolve_for(rows, tracker)?,
+    let (config, rows) = match frames {
+        Some(_) => (
+            crate::track_frames::fused_config(settings, rows, &fused)?,
+            Cow::Borrowed(rows),
+        ),
+        None => resolve_rows(settings, rows, tracker)?,
     };
     let tracks = match (frames, tracker) {
         (Some(dir), _) => {
-            crate::track_frames::track_frames_resolved(dir, rows, &config, &fused, seed)?
+            crate::track_frames::track_frames_resolved(dir, &rows, &config, &fused, seed)?
         }
-        (None, Tracker::Phd) => track_boxes_phd(rows, &config, seed)?,
-        (None, _) => track_points(tracker, rows, &config, seed)?,
+        (None, Tracker::Phd) => track_boxes_phd(&rows, &config, seed)?,
+        (None, _) => track_points(tracker, &rows, &config, seed)?,
     };
     Ok((tracks, config))
 }
@@ -759,6 +815,10 @@ const KEY_COMMENTS: [(&str, &[(&str, &str)]); 9] = [
             (
                 "max_log_ratio",
                 "the largest |ln f₁(s)/f₀(s)| one detection's score contributes",
+            ),
+            (
+                "gnn_min_log_ratio",
+                "gnn, gnn-online: drop detections whose fitted ln f₁(s)/f₀(s) is below this, then fit again (-inf = keep all)",
             ),
         ],
     ),

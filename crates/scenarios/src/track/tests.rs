@@ -492,6 +492,66 @@ fn a_high_score_isolated_pair_is_a_track_and_a_low_score_one_is_not() {
 }
 
 #[test]
+fn gnn_drops_the_detections_its_scores_call_clutter_and_refits() {
+    let rows = scored_file(0.25);
+    let all = TrackConfig::default()
+        .resolve_for(&rows, Tracker::Gnn)
+        .unwrap();
+    let m = all.score_model.as_ref().expect("scores vary: a model");
+    // By hand from the fitted ratio: the rows below the default threshold (−2), then the
+    // model fitted to the rest.
+    let kept: Vec<MotRow> = rows
+        .iter()
+        .filter(|r| m.log_ratio(r.confidence) >= -2.0)
+        .cloned()
+        .collect();
+    let dropped = rows.len() - kept.len();
+    assert!(m.log_ratio(0.25) < -2.0, "{m:?}");
+    assert!(
+        dropped > 30 && kept.len() > 90,
+        "{dropped} of {}",
+        rows.len()
+    );
+    let refitted = TrackConfig::default()
+        .resolve_for(&kept, Tracker::Gnn)
+        .unwrap();
+    let pair_track = |set: &TrackSet| {
+        set.tracks()
+            .iter()
+            .any(|t| t.points().iter().any(|p| p.location.position().x > 1400.0))
+    };
+    for tracker in [Tracker::Gnn, Tracker::GnnOnline] {
+        let (set, effective) =
+            track_detections_with_frames(tracker, &rows, &TrackConfig::default(), 1, None).unwrap();
+        assert_eq!(effective.gnn_dropped, dropped, "{tracker}");
+        assert_eq!(effective.model, refitted.model, "{tracker}");
+        assert!(
+            !pair_track(&set),
+            "{tracker}: the 0.25-scored pair is dropped"
+        );
+        // −∞ keeps every detection, and the pair links on its kinematics alone.
+        let keep_all = config("[scores]\ngnn_min_log_ratio = -inf\n");
+        let (set, effective) =
+            track_detections_with_frames(tracker, &rows, &keep_all, 1, None).unwrap();
+        assert_eq!(effective.gnn_dropped, 0);
+        assert_eq!(effective.model, all.model);
+        assert!(pair_track(&set), "{tracker}");
+    }
+    // MCMCDA weighs the scores instead and drops nothing.
+    let (_, effective) =
+        track_detections_with_frames(Tracker::Mcmcda, &rows, &TrackConfig::default(), 1, None)
+            .unwrap();
+    assert_eq!(effective.gnn_dropped, 0);
+    for bad in ["nan", "inf"] {
+        let err = error_of(
+            &format!("[scores]\ngnn_min_log_ratio = {bad}\n"),
+            Tracker::Gnn,
+        );
+        assert!(err.contains("gnn_min_log_ratio"), "{err}");
+    }
+}
+
+#[test]
 fn offline_mcmcda_links_a_walker_across_an_occlusion_longer_than_its_max_gap() {
     // Walker 1 at 4 px a frame (0.1 box widths: d̄ ≈ 2 / 0.1 = 20 frames), hidden in
     // frames 31-51 (a gap of 22 frames > d̄, ≤ 1.5 d̄); walker 2, visible throughout, and
