@@ -63,7 +63,7 @@ pub fn run(req: &Request<'_>) -> Outcome {
     if req.print_config {
         let rows = req.input.map(read_input).transpose()?.unwrap_or_default();
         let effective = match req.tracker {
-            Some(tracker) => settings.resolve_for(&rows, tracker)?,
+            Some(tracker) => settings.resolve_tracked(&rows, tracker)?.0,
             None => settings.resolve(&rows)?,
         };
         print!("{}", render_config(&effective, req.tracker)?);

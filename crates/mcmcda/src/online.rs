@@ -18,7 +18,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use tracker_model::{Frame, GATE_CHI2_2D, TrackSet, Vec2, ensure_non_negative, ensure_positive};
+use tracker_model::{Frame, GATE_CHI2_2D, TrackSet, Vec2, ensure_positive};
 
 use crate::config::Model;
 use crate::error::{Error, Result, invalid_parameter};
@@ -64,8 +64,8 @@ pub struct OnlineConfig {
     /// ambiguous only if a free measurement lies in its neighbourhood in one of the last
     /// `birth_lookback` scans, with which it could start a track (a lone false alarm far
     /// from every other free measurement changes nothing the chain would accept; a new
-    /// target's detections follow one another). 0 (the default) counts every such
-    /// measurement.
+    /// target's detections follow one another; scans beyond d̄ are not looked at, as nothing
+    /// there can precede it on a track). 0 (the default) counts every such measurement.
     pub birth_lookback: usize,
     /// Independent chains per window, run in parallel from the same start, each with
     /// `samples_per_scan` samples (and its own `patience`); the best MAP among them is the
@@ -102,8 +102,14 @@ impl OnlineConfig {
             ));
         }
         ensure_positive(self.extension_gate, "extension_gate")?;
-        if self.rival_log_ratio != f64::INFINITY {
-            ensure_non_negative(self.rival_log_ratio, "rival_log_ratio")?;
+        if self.rival_log_ratio.is_nan() || self.rival_log_ratio < 0.0 {
+            return Err(invalid_parameter(
+                "rival_log_ratio",
+                format!(
+                    "{}; it must be ≥ 0 (∞ counts every gated rival)",
+                    self.rival_log_ratio
+                ),
+            ));
         }
         if !(1..=64).contains(&self.chains) {
             return Err(invalid_parameter(
@@ -652,13 +658,17 @@ fn last_scan_is_ambiguous(
         let best = best_of_meas.entry(m).or_insert(f64::INFINITY);
         *best = best.min(cost);
     }
+    // ∞ counts every gated pair, whatever the costs (as before the ratio existed).
+    let close = |cost: f64, best: f64| {
+        config.rival_log_ratio == f64::INFINITY || cost <= best + config.rival_log_ratio
+    };
     let mut close_of_track: BTreeMap<usize, usize> = BTreeMap::new();
     let mut close_of_meas: BTreeMap<MeasId, usize> = BTreeMap::new();
     for &(cost, k, m) in pairs {
-        if cost <= best_of_track[&k] + config.rival_log_ratio {
+        if close(cost, best_of_track[&k]) {
             *close_of_track.entry(k).or_default() += 1;
         }
-        if cost <= best_of_meas[&m] + config.rival_log_ratio {
+        if close(cost, best_of_meas[&m]) {
             *close_of_meas.entry(m).or_default() += 1;
         }
     }
@@ -669,9 +679,11 @@ fn last_scan_is_ambiguous(
     {
         return true;
     }
+    // A free measurement more than d̄ scans back cannot precede m on a track.
+    let lookback = config.birth_lookback.min(partition.problem.max_gap());
     let could_start_a_track = |m: MeasId| {
         config.birth_lookback == 0
-            || (1..=config.birth_lookback).any(|d| {
+            || (1..=lookback).any(|d| {
                 partition
                     .predecessors(m, d)
                     .iter()

@@ -61,8 +61,11 @@ enum Bounded {
 thread_local! {
     /// Tests switch off the rejection against a bound, to compare with the exact ratio.
     pub(crate) static BOUNDED_REJECTION: std::cell::Cell<bool> = const { std::cell::Cell::new(true) };
-    /// How often a move was rejected against its bound (tests check the case is exercised).
-    pub(crate) static BOUNDED_REJECTIONS: std::cell::Cell<u64> = const { std::cell::Cell::new(0) };
+    /// How often each move type (in [`Move::ALL`] order) was rejected against its bound
+    /// (tests check that every bounded move exercises the case).
+    pub(crate) static BOUNDED_REJECTIONS: std::cell::Cell<[u64; 8]> = const { std::cell::Cell::new([0; 8]) };
+    /// Whether the current step was rejected against its bound.
+    static BOUNDED_THIS_STEP: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
 /// Tests: a bound of the log ratio must hold for the exact ratio.
@@ -171,6 +174,8 @@ impl<'a, R: Rng> Chain<'a, R> {
         if !m.allowed_with(self.state.n_tracks()) {
             return false;
         }
+        #[cfg(test)]
+        BOUNDED_THIS_STEP.with(|b| b.set(false));
         let outcome = match m {
             Move::Birth => self.birth(),
             Move::Death => self.death(),
@@ -180,6 +185,14 @@ impl<'a, R: Rng> Chain<'a, R> {
             Move::Switch => self.switch(),
         };
         self.stats.proposed[m.index()] += 1;
+        #[cfg(test)]
+        if BOUNDED_THIS_STEP.with(std::cell::Cell::get) {
+            BOUNDED_REJECTIONS.with(|n| {
+                let mut counts = n.get();
+                counts[m.index()] += 1;
+                n.set(counts);
+            });
+        }
         let accepted = matches!(outcome, Outcome::Accepted);
         if accepted {
             self.stats.accepted[m.index()] += 1;
@@ -254,7 +267,10 @@ impl<'a, R: Rng> Chain<'a, R> {
             let log_u = self.rng.random::<f64>().ln();
             if log_u >= bound {
                 #[cfg(test)]
-                BOUNDED_REJECTIONS.with(|n| n.set(n.get() + 1));
+                {
+                    BOUNDED_THIS_STEP.with(|b| b.set(true));
+                    self.last_log_q = None;
+                }
                 return Bounded::Rejected;
             }
             return Bounded::Undecided { log_u: Some(log_u) };

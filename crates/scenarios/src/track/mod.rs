@@ -194,12 +194,15 @@ pub struct ScoreConfig {
     pub enabled: bool,
     /// The largest |ln f₁(s)/f₀(s)| a score contributes.
     pub max_log_ratio: f64,
-    /// GNN and online GNN drop the detections whose fitted ln f₁(s)/f₀(s) is below this, and
-    /// fit the model again to the rest, where the file's scores give a [`ScoreModel`].
-    /// GNN decides every association at once and starts a track from any two detections,
-    /// so a false box it takes costs a false positive or a switch that its cost cannot weigh
-    /// by score; MCMCDA weighs each detection's score in the posterior and drops none. −∞
-    /// keeps every detection.
+    /// GNN and online GNN drop the detections whose fitted ln f₁(s)/f₀(s) (clamped to
+    /// ±`max_log_ratio`; 0 for a detection without a finite score) is below this, and fit
+    /// the model again to the rest, where the file's scores give a [`ScoreModel`]. GNN
+    /// decides every association at once and starts a track from any two detections, so a
+    /// false box it takes costs a false positive or a switch that its cost cannot weigh by
+    /// score; MCMCDA weighs each detection's score in the posterior and drops none. −∞ keeps
+    /// every detection; above `max_log_ratio` it would drop all, and is refused. A
+    /// configuration printed for GNN holds the refitted model, which loading it pins; the
+    /// drop is then made with the score densities fitted under that model.
     pub gnn_min_log_ratio: f64,
 }
 
@@ -214,7 +217,7 @@ impl Default for ScoreConfig {
 }
 
 impl ScoreConfig {
-    /// Checks the bound (finite, ≥ 0) and GNN's threshold (not NaN, −∞ allowed).
+    /// Checks the bound (finite, ≥ 0) and GNN's threshold (at most the bound, −∞ allowed).
     pub fn check(&self) -> Result<()> {
         if !(self.max_log_ratio.is_finite() && self.max_log_ratio >= 0.0) {
             bail!(
@@ -222,10 +225,12 @@ impl ScoreConfig {
                 self.max_log_ratio
             );
         }
-        if self.gnn_min_log_ratio.is_nan() || self.gnn_min_log_ratio == f64::INFINITY {
+        if self.gnn_min_log_ratio.is_nan() || self.gnn_min_log_ratio > self.max_log_ratio {
             bail!(
-                "gnn_min_log_ratio = {}; it must be a number below ∞ (-inf keeps every detection)",
-                self.gnn_min_log_ratio
+                "gnn_min_log_ratio = {}; it must be at most max_log_ratio = {} (every clamped \
+                 ratio would be below it; -inf keeps every detection)",
+                self.gnn_min_log_ratio,
+                self.max_log_ratio
             );
         }
         Ok(())
@@ -252,10 +257,15 @@ pub struct ScoreModel {
 ///   the crate's default, drops people through short occlusions; 5 and 8 did alike, 12
 ///   worse, on the tuning sequences of `mot-realistic`);
 /// - each window runs two chains of 1,000 samples in parallel instead of one of 2,000, and
-///   no sample is drawn at a frame whose every detection extends the only track gating it.
-///   On the tuning sequences (tracker seeds 0-2) this tracked as well as the single chain
-///   (mean MOTA 0.860 / IDF1 0.722 against 0.860 / 0.717); on the reported sequences it
-///   takes 0.31-0.43 ms per frame instead of 0.74-0.79 (docs/mot-realistic.md).
+///   no sample is drawn at a frame whose every detection extends the only track gating it
+///   (on the tuning sequences, tracker seeds 0-2, mean MOTA / IDF1 0.860 / 0.722 against the
+///   single chain's 0.860 / 0.717);
+/// - a frame counts as ambiguous only for a rival at least e⁻⁴ as likely as the best
+///   association (`rival_log_ratio` = 4) or for an ungated detection with a free one in its
+///   neighbourhood in the last two frames (`birth_lookback` = 2): the fastest setting within
+///   0.002 MOTA of counting everything on the tuning sequences (0.859 / 0.733). With the
+///   sampler's bounded rejection it takes 0.11-0.19 ms per frame on the reported sequences
+///   (docs/mot-realistic.md).
 fn online_base() -> OnlineConfig {
     OnlineConfig {
         coast_scans: 5,
@@ -393,6 +403,47 @@ impl TrackConfig {
         self.resolve_scores(rows, tracker != Tracker::Phd)
     }
 
+    /// The configuration `tracker` runs with on `rows`, and the detections it tracks: GNN and
+    /// online GNN drop those whose fitted score ratio is below `[scores] gnn_min_log_ratio`
+    /// and are fitted again to the rest (when the file's scores give a score model and the
+    /// threshold drops some of them); the other trackers take [`TrackConfig::resolve_for`]
+    /// and every row. `--print-config` prints this configuration.
+    pub fn resolve_tracked<'a>(
+        &self,
+        rows: &'a [MotRow],
+        tracker: Tracker,
+    ) -> Result<(EffectiveConfig, Cow<'a, [MotRow]>)> {
+        let config = self.resolve_for(rows, tracker)?;
+        let Some(scores) = config.score_model.as_ref() else {
+            return Ok((config, Cow::Borrowed(rows)));
+        };
+        if !matches!(tracker, Tracker::Gnn | Tracker::GnnOnline) {
+            return Ok((config, Cow::Borrowed(rows)));
+        }
+        let min = config.scores.gnn_min_log_ratio;
+        let kept: Vec<MotRow> = rows
+            .iter()
+            .filter(|r| scores.log_ratio(r.confidence) >= min)
+            .cloned()
+            .collect();
+        if kept.is_empty() {
+            let best = rows
+                .iter()
+                .map(|r| scores.log_ratio(r.confidence))
+                .fold(f64::NEG_INFINITY, f64::max);
+            bail!(
+                "in the [scores] table of the configuration: gnn_min_log_ratio = {min} drops \
+                 every detection (the file's fitted ln f₁/f₀ reaches at most {best:.3})"
+            );
+        }
+        if kept.len() == rows.len() {
+            return Ok((config, Cow::Borrowed(rows)));
+        }
+        let mut refitted = self.resolve_for(&kept, tracker)?;
+        refitted.gnn_dropped = rows.len() - kept.len();
+        Ok((refitted, Cow::Owned(kept)))
+    }
+
     fn resolve_scores(&self, rows: &[MotRow], with_scores: bool) -> Result<EffectiveConfig> {
         let boxes = boxes(rows);
         let (model_base, mut phd_base) = if boxes.is_empty() {
@@ -524,43 +575,13 @@ pub fn track_detections(
     if rows.is_empty() {
         bail!("no detections");
     }
-    let (config, rows) = resolve_rows(settings, rows, tracker)?;
+    let (config, rows) = settings.resolve_tracked(rows, tracker)?;
     match tracker {
         Tracker::Phd => track_boxes_phd(&rows, &config, seed),
         Tracker::Mcmcda | Tracker::McmcdaOnline | Tracker::Gnn | Tracker::GnnOnline => {
             track_points(tracker, &rows, &config, seed)
         }
     }
-}
-
-/// The configuration `tracker` runs with on `rows`, and the detections it tracks: GNN and
-/// online GNN drop those whose fitted score ratio is below `[scores] gnn_min_log_ratio` and
-/// are fitted again to the rest (when the file's scores give a score model and the threshold
-/// drops some, but not all, of them).
-fn resolve_rows<'a>(
-    settings: &TrackConfig,
-    rows: &'a [MotRow],
-    tracker: Tracker,
-) -> Result<(EffectiveConfig, Cow<'a, [MotRow]>)> {
-    let config = settings.resolve_for(rows, tracker)?;
-    let Some(scores) = config.score_model.as_ref() else {
-        return Ok((config, Cow::Borrowed(rows)));
-    };
-    if !matches!(tracker, Tracker::Gnn | Tracker::GnnOnline) {
-        return Ok((config, Cow::Borrowed(rows)));
-    }
-    let min = config.scores.gnn_min_log_ratio;
-    let kept: Vec<MotRow> = rows
-        .iter()
-        .filter(|r| scores.log_ratio(r.confidence) >= min)
-        .cloned()
-        .collect();
-    if kept.len() == rows.len() || kept.is_empty() {
-        return Ok((config, Cow::Borrowed(rows)));
-    }
-    let mut refitted = settings.resolve_for(&kept, tracker)?;
-    refitted.gnn_dropped = rows.len() - kept.len();
-    Ok((refitted, Cow::Owned(kept)))
 }
 
 /// [`track_detections`], or, given a folder of `frames`, the PHD tracker fused with image local
@@ -586,7 +607,7 @@ pub fn track_detections_with_frames(
             crate::track_frames::fused_config(settings, rows, &fused)?,
             Cow::Borrowed(rows),
         ),
-        None => resolve_rows(settings, rows, tracker)?,
+        None => settings.resolve_tracked(rows, tracker)?,
     };
     let tracks = match (frames, tracker) {
         (Some(dir), _) => {

@@ -73,7 +73,7 @@ fn printed_configs_load_back_unchanged() {
         ] {
             // As `--print-config` resolves: for the tracker named, or everything.
             let resolve = |c: &TrackConfig| match tracker {
-                Some(t) => c.resolve_for(&rows, t).unwrap(),
+                Some(t) => c.resolve_tracked(&rows, t).unwrap().0,
                 None => c.resolve(&rows).unwrap(),
             };
             let effective = resolve(&TrackConfig::default());
@@ -537,18 +537,33 @@ fn gnn_drops_the_detections_its_scores_call_clutter_and_refits() {
         assert_eq!(effective.model, all.model);
         assert!(pair_track(&set), "{tracker}");
     }
-    // MCMCDA weighs the scores instead and drops nothing.
-    let (_, effective) =
-        track_detections_with_frames(Tracker::Mcmcda, &rows, &TrackConfig::default(), 1, None)
-            .unwrap();
-    assert_eq!(effective.gnn_dropped, 0);
-    for bad in ["nan", "inf"] {
+    // MCMCDA weighs the scores instead, and the PHD has none: both run on every detection
+    // with the model fitted to all of them.
+    for tracker in [Tracker::Mcmcda, Tracker::McmcdaOnline, Tracker::Phd] {
+        let (_, effective) =
+            track_detections_with_frames(tracker, &rows, &TrackConfig::default(), 1, None).unwrap();
+        assert_eq!(effective.gnn_dropped, 0);
+        assert_eq!(effective.model, all.model, "{tracker}");
+    }
+    // A threshold above the bound of the ratios, or NaN, is refused; one that the file's best
+    // scores do not reach is an error when GNN runs, not a silent no-op.
+    for bad in ["nan", "inf", "3.5"] {
         let err = error_of(
             &format!("[scores]\ngnn_min_log_ratio = {bad}\n"),
             Tracker::Gnn,
         );
         assert!(err.contains("gnn_min_log_ratio"), "{err}");
     }
+    // With the bound at 50 the file's ratios stay far below it (the densities have a floor).
+    let err = track_detections(
+        Tracker::Gnn,
+        &rows,
+        &config("[scores]\nmax_log_ratio = 50.0\ngnn_min_log_ratio = 49.0\n"),
+        1,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("drops every detection"), "{err}");
 }
 
 #[test]
