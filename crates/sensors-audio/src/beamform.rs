@@ -1,6 +1,7 @@
 //! Delay-and-sum beamforming over B beams (Kushwaha et al. 2008; our §5.1 reconstruction), in
 //! the time domain (band-pass FIR, then windowed-sinc fractional steering delays) and in the
-//! frequency domain (steered response power over FFT bins, optionally PHAT-weighted).
+//! frequency domain (steered response power over FFT bins, optionally PHAT-weighted), and the
+//! adaptive minimum-variance distortionless response (MVDR, Capon 1969) over the same bins.
 //!
 //! Sign convention: a plane wave from direction u reaches microphone m (at r_m from the array
 //! centre) τ_m = (r_m · u)/c seconds *early*, x_m(t) = s(t + τ_m), so steering *delays* each
@@ -11,6 +12,7 @@
 use std::f64::consts::TAU;
 use std::sync::Arc;
 
+use nalgebra::DMatrix;
 use realfft::num_complex::Complex;
 use realfft::{RealFftPlanner, RealToComplex};
 use serde::{Deserialize, Serialize};
@@ -31,6 +33,18 @@ pub enum Method {
     /// FFT per channel, phase-shift steering per bin in the band, energy by Parseval.
     #[default]
     FrequencyDomain,
+    /// Minimum-variance distortionless response (Capon 1969, "High-resolution
+    /// frequency-wavenumber spectrum analysis", Proc. IEEE 57(8)): per FFT bin k in the band,
+    /// the spatial covariance R_k of the channels' spectra, averaged over frames with
+    /// forgetting factor α (`mvdr_forgetting`) and loaded with ε·tr(R_k)/M on its diagonal
+    /// (`mvdr_loading`), gives beam b the power 1/(d_{k,b}ᴴ R_k⁻¹ d_{k,b}) of the filter
+    /// that passes b's plane wave unchanged and minimises everything else; the energy is the
+    /// Parseval-weighted sum over bins times M², so that one noise-free plane wave peaks at the
+    /// delay-and-sum energy. Two sources inside one delay-and-sum beam give two peaks when
+    /// they are uncorrelated and well above the noise. The covariance carries over from frame
+    /// to frame: frames must come in time order ([`Beamformer::reset`] forgets them;
+    /// [`Beamformer::beamform`] starts afresh).
+    Mvdr,
 }
 
 /// Spectral weighting of the frequency-domain beamformer.
@@ -85,6 +99,12 @@ pub struct BeamformConfig {
     pub fir_taps: usize,
     /// Zero crossings each side of the fractional-delay sinc (time domain only).
     pub interp_half_width: usize,
+    /// MVDR: the weight α ∈ [0, 1) of the past in the running covariance,
+    /// R ← α R + (1 − α) x xᴴ (0: this frame alone, a rank-one estimate).
+    pub mvdr_forgetting: f64,
+    /// MVDR: diagonal loading ε > 0, as a fraction of the mean channel power tr(R)/M (keeps
+    /// R invertible and the beams robust to array errors; larger is closer to delay-and-sum).
+    pub mvdr_loading: f64,
 }
 
 impl Default for BeamformConfig {
@@ -101,6 +121,8 @@ impl Default for BeamformConfig {
             window: Window::Hann,
             fir_taps: 65,
             interp_half_width: 4,
+            mvdr_forgetting: 0.8,
+            mvdr_loading: 0.01,
         }
     }
 }
@@ -262,6 +284,23 @@ pub struct Beamformer {
 enum Engine {
     Time(TimeDomain),
     Freq(FreqDomain),
+    Mvdr(Mvdr),
+}
+
+/// The MVDR engine: the frequency-domain front end (its band spectra) and the running
+/// covariance per bin.
+#[derive(Clone)]
+struct Mvdr {
+    freq: FreqDomain,
+    /// Each bin's array manifold, d_{k,b,m} = e^{+j2πf_kτ_{m,b}} (the conjugate steering
+    /// phases), as an M × B matrix per bin.
+    manifold: Vec<DMatrix<Complex<f64>>>,
+    /// Running covariance per bin, M × M.
+    cov: Vec<DMatrix<Complex<f64>>>,
+    /// Whether `cov` holds a frame yet.
+    primed: bool,
+    forgetting: f64,
+    loading: f64,
 }
 
 #[derive(Clone)]
@@ -408,7 +447,7 @@ impl BeamformConfig {
                     beam: vec![0.0; n_out],
                 })
             }
-            Method::FrequencyDomain => {
+            Method::FrequencyDomain | Method::Mvdr => {
                 let required = 2 * spread + 2;
                 if self.frame_len < required {
                     return Err(AudioError::FrameTooShort {
@@ -454,7 +493,7 @@ impl BeamformConfig {
                         (if edge { 1.0 } else { 2.0 }) / (l as f64 * w2)
                     })
                     .collect();
-                Engine::Freq(FreqDomain {
+                let freq = FreqDomain {
                     input: fft.make_input_vec(),
                     spectrum: fft.make_output_vec(),
                     scratch: fft.make_scratch_vec(),
@@ -466,13 +505,52 @@ impl BeamformConfig {
                     bin_weight,
                     band: vec![Complex::new(0.0, 0.0); n_bins * n_mics],
                     phat: self.weighting == Weighting::Phat,
-                })
+                };
+                if self.method == Method::Mvdr {
+                    Engine::Mvdr(self.mvdr(freq, n_mics)?)
+                } else {
+                    Engine::Freq(freq)
+                }
             }
         };
         Ok(Beamformer {
             config: self.clone(),
             n_mics,
             engine,
+        })
+    }
+
+    /// The MVDR engine on `freq`'s bins: checks α and ε and tabulates the manifolds.
+    fn mvdr(&self, freq: FreqDomain, n_mics: usize) -> Result<Mvdr> {
+        if freq.phat {
+            return Err(AudioError::Unsupported(
+                "PHAT weighting is for delay-and-sum; MVDR whitens by its covariance".into(),
+            ));
+        }
+        if !(self.mvdr_forgetting.is_finite() && (0.0..1.0).contains(&self.mvdr_forgetting)) {
+            return Err(Error::InvalidParameter {
+                name: "mvdr_forgetting",
+                reason: format!("{}: it must lie in [0, 1)", self.mvdr_forgetting),
+            }
+            .into());
+        }
+        tracker_model::ensure_positive(self.mvdr_loading, "mvdr_loading")?;
+        let (n_beams, n_bins) = (self.n_beams, freq.n_bins);
+        let per_beam = n_bins * n_mics;
+        let manifold = (0..n_bins)
+            .map(|k| {
+                DMatrix::from_fn(n_mics, n_beams, |m, b| {
+                    freq.steer[b * per_beam + k * n_mics + m].conj()
+                })
+            })
+            .collect();
+        Ok(Mvdr {
+            manifold,
+            cov: vec![DMatrix::zeros(n_mics, n_mics); n_bins],
+            primed: false,
+            forgetting: self.mvdr_forgetting,
+            loading: self.mvdr_loading,
+            freq,
         })
     }
 }
@@ -496,8 +574,17 @@ impl Beamformer {
         match &mut self.engine {
             Engine::Time(td) => td.run(channels, energies),
             Engine::Freq(fd) => fd.run(channels, energies),
+            Engine::Mvdr(mv) => mv.run(channels, energies),
         }
         Ok(())
+    }
+
+    /// Forgets the frames seen so far (MVDR's running covariance; the other methods keep no
+    /// state).
+    pub fn reset(&mut self) {
+        if let Engine::Mvdr(mv) = &mut self.engine {
+            mv.primed = false;
+        }
     }
 
     /// Beam energies of one frame (see [`Beamformer::frame_energies_into`]).
@@ -527,6 +614,7 @@ impl Beamformer {
                 got: recording.n_channels(),
             });
         }
+        self.reset();
         let (l, hop) = (self.config.frame_len, self.config.hop);
         let fs = f64::from(self.config.sample_rate_hz);
         let mut out = Vec::new();
@@ -588,6 +676,27 @@ impl TimeDomain {
 
 impl FreqDomain {
     fn run(&mut self, channels: &[&[f32]], energies: &mut [f64]) {
+        self.load_band(channels);
+        let n_mics = channels.len();
+        let per_beam = self.n_bins * n_mics;
+        for (b, e) in energies.iter_mut().enumerate() {
+            let steer = &self.steer[b * per_beam..(b + 1) * per_beam];
+            let mut total = 0.0;
+            for k in 0..self.n_bins {
+                let s = &steer[k * n_mics..(k + 1) * n_mics];
+                let x = &self.band[k * n_mics..(k + 1) * n_mics];
+                let mut acc = Complex::new(0.0, 0.0);
+                for (a, c) in x.iter().zip(s) {
+                    acc += a * c;
+                }
+                total += self.bin_weight[k] * acc.norm_sqr();
+            }
+            *e = total;
+        }
+    }
+
+    /// The windowed spectra of every channel over the band, into `band` ([bin][mic]).
+    fn load_band(&mut self, channels: &[&[f32]]) {
         let n_mics = channels.len();
         for (m, x) in channels.iter().enumerate() {
             for ((inp, &xv), w) in self.input.iter_mut().zip(x.iter()).zip(&self.window) {
@@ -613,20 +722,54 @@ impl FreqDomain {
                 self.band[k * n_mics + m] = v;
             }
         }
-        let per_beam = self.n_bins * n_mics;
-        for (b, e) in energies.iter_mut().enumerate() {
-            let steer = &self.steer[b * per_beam..(b + 1) * per_beam];
-            let mut total = 0.0;
-            for k in 0..self.n_bins {
-                let s = &steer[k * n_mics..(k + 1) * n_mics];
-                let x = &self.band[k * n_mics..(k + 1) * n_mics];
-                let mut acc = Complex::new(0.0, 0.0);
-                for (a, c) in x.iter().zip(s) {
-                    acc += a * c;
+    }
+}
+
+impl Mvdr {
+    fn run(&mut self, channels: &[&[f32]], energies: &mut [f64]) {
+        let fd = &mut self.freq;
+        fd.load_band(channels);
+        let n_mics = channels.len();
+        let gain = (n_mics * n_mics) as f64;
+        let (alpha, fresh) = if self.primed {
+            (self.forgetting, 1.0 - self.forgetting)
+        } else {
+            (0.0, 1.0)
+        };
+        self.primed = true;
+        for k in 0..fd.n_bins {
+            let x = &fd.band[k * n_mics..(k + 1) * n_mics];
+            let cov = &mut self.cov[k];
+            for i in 0..n_mics {
+                for j in 0..n_mics {
+                    cov[(i, j)] = cov[(i, j)] * alpha + x[i] * x[j].conj() * fresh;
                 }
-                total += self.bin_weight[k] * acc.norm_sqr();
             }
-            *e = total;
+            let power = (0..n_mics).map(|i| cov[(i, i)].re).sum::<f64>() / n_mics as f64;
+            if !(power > 0.0 && power.is_finite()) {
+                // A silent bin has no direction (and delay-and-sum gives it 0 too).
+                continue;
+            }
+            let mut loaded = cov.clone();
+            for i in 0..n_mics {
+                loaded[(i, i)] += self.loading * power;
+            }
+            // Positive definite by the loading, so the factorisation exists.
+            let Some(chol) = loaded.cholesky() else {
+                continue;
+            };
+            let d = &self.manifold[k];
+            let solved = chol.solve(d);
+            for (b, e) in energies.iter_mut().enumerate() {
+                // dᴴ R⁻¹ d, real and > 0 for a Hermitian positive definite R.
+                let q: f64 = d
+                    .column(b)
+                    .iter()
+                    .zip(solved.column(b).iter())
+                    .map(|(a, z)| (a.conj() * z).re)
+                    .sum();
+                *e += fd.bin_weight[k] * gain / q;
+            }
         }
     }
 }

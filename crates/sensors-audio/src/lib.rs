@@ -15,7 +15,8 @@
 //!   diffuse background noise at an SNR; the generator is an argument.
 //! * [`BeamformConfig`] → [`Beamformer`]: time-domain delay-and-sum (FIR band-pass,
 //!   fractional delays) or frequency-domain steered response power (`realfft`), optionally
-//!   PHAT-weighted, over B beams; output one [`Beamform`] per frame with its time stamp.
+//!   PHAT-weighted, or the adaptive MVDR (Capon) over the same bins, over B beams; output one
+//!   [`Beamform`] per frame with its time stamp.
 //! * [`Beamform::doa`] (argmax + parabolic refinement), [`Beamform::peaks`] (several
 //!   sources), [`Beamform::bearing_profile`] → [`BearingProfile::project`] onto a
 //!   `tracker_model::LikelihoodGrid`.
