@@ -1719,31 +1719,41 @@ fn regrown_track(
     (to.len() >= 2).then_some(to)
 }
 
-#[test]
-fn single_track_q_by_suffix_sums_equals_the_sum_over_prefixes() {
+/// Four walkers close together over `n_scans` scans with misses (p_d = 0.8) and 0-2 clutter
+/// points per scan, so that candidate sets hold several free measurements and growth can go
+/// astray; with their measurement ids.
+fn four_close_walkers(rng: &mut ChaCha8Rng, n_scans: u32) -> (Vec<Scan>, Vec<Vec<u32>>) {
     use rand::RngExt;
-    // Four walkers close together over 25 scans with misses and clutter, so that candidate
-    // sets hold several free measurements and growth can go astray.
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let (scans, truth) = walker_scans(
-        &mut rng,
-        (25, 4, 0.8),
+    walker_scans(
+        rng,
+        (n_scans, 4, 0.8),
         |w, t| (50.0 * w + 6.0 * t, 40.0 * w + (w - 1.5) * 4.0 * t),
         |rng| {
             (0..rng.random_range(0..3))
                 .map(|_| (rng.random_range(0.0..300.0), rng.random_range(0.0..300.0)))
                 .collect()
         },
-    );
+    )
+}
+
+/// The model for [`four_close_walkers`]: v̄ = 30, d̄ = 4, the given head probability.
+fn close_walkers_model(head_probability: f64) -> Model {
+    McmcdaConfig {
+        max_speed: 30.0,
+        max_gap: 4,
+        head_probability,
+        ..McmcdaConfig::default()
+    }
+    .check()
+    .unwrap()
+}
+
+#[test]
+fn single_track_q_by_suffix_sums_equals_the_sum_over_prefixes() {
+    let mut rng = ChaCha8Rng::seed_from_u64(5);
+    let (scans, truth) = four_close_walkers(&mut rng, 25);
     for head_probability in [0.0, 0.3, 1.0] {
-        let model = McmcdaConfig {
-            max_speed: 30.0,
-            max_gap: 4,
-            head_probability,
-            ..McmcdaConfig::default()
-        }
-        .check()
-        .unwrap();
+        let model = close_walkers_model(head_probability);
         let problem = Problem::from_scans(&model, &scans).unwrap();
         let window = problem.all_scans().unwrap();
         let start = Partition::from_tracks(&model, &problem, window, &truth).unwrap();
@@ -1857,28 +1867,10 @@ fn single_track_q_stops_early_with_the_full_sums_bits() {
 #[test]
 fn bounded_rejection_takes_the_exact_ratios_path() {
     use crate::sampler::{BOUNDED_REJECTION, BOUNDED_REJECTIONS};
-    use rand::RngExt;
-    let mut rng = ChaCha8Rng::seed_from_u64(21);
-    let (scans, _) = walker_scans(
-        &mut rng,
-        (20, 4, 0.8),
-        |w, t| (50.0 * w + 6.0 * t, 40.0 * w + (w - 1.5) * 4.0 * t),
-        |rng| {
-            (0..rng.random_range(0..3))
-                .map(|_| (rng.random_range(0.0..300.0), rng.random_range(0.0..300.0)))
-                .collect()
-        },
-    );
+    let (scans, _) = four_close_walkers(&mut ChaCha8Rng::seed_from_u64(21), 20);
     let before = BOUNDED_REJECTIONS.with(std::cell::Cell::get);
     for head_probability in [0.0, 0.3, 1.0] {
-        let model = McmcdaConfig {
-            max_speed: 30.0,
-            max_gap: 4,
-            head_probability,
-            ..McmcdaConfig::default()
-        }
-        .check()
-        .unwrap();
+        let model = close_walkers_model(head_probability);
         let problem = Problem::from_scans(&model, &scans).unwrap();
         for window in [problem.all_scans().unwrap(), 6..=19] {
             let run = |bounded: bool| {
