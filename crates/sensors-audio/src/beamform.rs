@@ -24,7 +24,8 @@ use crate::interp::{bandpass_fir, fractional_taps};
 use crate::recording::{Recording, check_channels};
 use tracker_model::{BearingProfile, SensorPose};
 
-/// Where the delay-and-sum is computed.
+/// How the beam energies are computed: delay-and-sum in the time or the frequency domain, or
+/// MVDR over the frequency-domain bins.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum Method {
@@ -39,11 +40,12 @@ pub enum Method {
     /// forgetting factor α (`mvdr_forgetting`) and loaded with ε·tr(R_k)/M on its diagonal
     /// (`mvdr_loading`), gives beam b the power 1/(d_{k,b}ᴴ R_k⁻¹ d_{k,b}) of the filter
     /// that passes b's plane wave unchanged and minimises everything else; the energy is the
-    /// Parseval-weighted sum over bins times M², so that one noise-free plane wave peaks at the
-    /// delay-and-sum energy. Two sources inside one delay-and-sum beam give two peaks when
+    /// Parseval-weighted sum over bins times M², so that one noise-free plane wave peaks at
+    /// (1 + ε/M) times the delay-and-sum energy. Two sources inside one delay-and-sum beam give two peaks when
     /// they are uncorrelated and well above the noise. The covariance carries over from frame
     /// to frame: frames must come in time order ([`Beamformer::reset`] forgets them;
-    /// [`Beamformer::beamform`] starts afresh).
+    /// [`Beamformer::beamform`] starts afresh), and its mean age is α/(1 − α) hops, so a
+    /// moving source's bearing lags by about that much.
     Mvdr,
 }
 
@@ -89,11 +91,11 @@ pub struct BeamformConfig {
     pub band_hz: [f64; 2],
     /// Speed of sound, m/s.
     pub sound_speed_mps: f64,
-    /// Time or frequency domain.
+    /// Time- or frequency-domain delay-and-sum, or MVDR.
     pub method: Method,
     /// Plain or PHAT (frequency domain only).
     pub weighting: Weighting,
-    /// Analysis window (frequency domain only).
+    /// Analysis window (frequency domain and MVDR).
     pub window: Window,
     /// Length of the band-pass FIR (time domain only; odd).
     pub fir_taps: usize,
@@ -102,8 +104,9 @@ pub struct BeamformConfig {
     /// MVDR: the weight α ∈ [0, 1) of the past in the running covariance,
     /// R ← α R + (1 − α) x xᴴ (0: this frame alone, a rank-one estimate).
     pub mvdr_forgetting: f64,
-    /// MVDR: diagonal loading ε > 0, as a fraction of the mean channel power tr(R)/M (keeps
-    /// R invertible and the beams robust to array errors; larger is closer to delay-and-sum).
+    /// MVDR: diagonal loading ε ∈ [10⁻⁹, 10⁹], as a fraction of the mean channel power
+    /// tr(R)/M (keeps R invertible and the beams robust to array errors; larger is closer to
+    /// delay-and-sum).
     pub mvdr_loading: f64,
 }
 
@@ -129,7 +132,8 @@ impl Default for BeamformConfig {
 
 /// The beam energies of one frame: the node's report (the "beamform"). `energies[b]` is the
 /// mean power of the beam steered to `b`·2π/B (array frame) over the frame, in squared input
-/// units (dimensionless under PHAT); `time_s` is the frame's centre on the recording's clock.
+/// units (dimensionless under PHAT; under MVDR the power of its filter, from a covariance that
+/// remembers earlier frames); `time_s` is the frame's centre on the recording's clock.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Beamform {
     /// Centre of the frame, seconds.
@@ -272,7 +276,9 @@ impl Beamform {
 }
 
 /// A checked beamformer for one array; holds its scratch buffers, so beamforming a frame does
-/// not allocate. Clone it to use on several threads.
+/// not allocate. Clone it to use on several threads. MVDR keeps state (its running
+/// covariance): one time-ordered stream of frames per `Beamformer`, and a clone copies the
+/// covariance.
 #[derive(Clone)]
 pub struct Beamformer {
     config: BeamformConfig,
@@ -297,6 +303,9 @@ struct Mvdr {
     manifold: Vec<DMatrix<Complex<f64>>>,
     /// Running covariance per bin, M × M.
     cov: Vec<DMatrix<Complex<f64>>>,
+    /// Scratch: the loaded covariance and its Cholesky factor (M × M), and L⁻¹ d (M × B).
+    loaded: DMatrix<Complex<f64>>,
+    solved: DMatrix<Complex<f64>>,
     /// Whether `cov` holds a frame yet.
     primed: bool,
     forgetting: f64,
@@ -534,7 +543,7 @@ impl BeamformConfig {
             }
             .into());
         }
-        tracker_model::ensure_positive(self.mvdr_loading, "mvdr_loading")?;
+        tracker_model::ensure_in_range(self.mvdr_loading, 1e-9, 1e9, "mvdr_loading")?;
         let (n_beams, n_bins) = (self.n_beams, freq.n_bins);
         let per_beam = n_bins * n_mics;
         let manifold = (0..n_bins)
@@ -547,6 +556,8 @@ impl BeamformConfig {
         Ok(Mvdr {
             manifold,
             cov: vec![DMatrix::zeros(n_mics, n_mics); n_bins],
+            loaded: DMatrix::zeros(n_mics, n_mics),
+            solved: DMatrix::zeros(n_mics, n_beams),
             primed: false,
             forgetting: self.mvdr_forgetting,
             loading: self.mvdr_loading,
@@ -746,30 +757,39 @@ impl Mvdr {
                 }
             }
             let power = (0..n_mics).map(|i| cov[(i, i)].re).sum::<f64>() / n_mics as f64;
-            if !(power > 0.0 && power.is_finite()) {
-                // A silent bin has no direction (and delay-and-sum gives it 0 too).
+            if !(power > SILENT_POWER && power.is_finite()) {
+                // A silent bin has no direction (delay-and-sum gives it 0 too); its memory is
+                // cleared, so that a long silence does not decay into subnormal numbers.
+                cov.fill(Complex::new(0.0, 0.0));
                 continue;
             }
-            let mut loaded = cov.clone();
+            // The scratch matrix is factorised in place and taken back (no allocation).
+            let mut loaded = std::mem::replace(&mut self.loaded, DMatrix::zeros(0, 0));
+            loaded.copy_from(cov);
             for i in 0..n_mics {
                 loaded[(i, i)] += self.loading * power;
             }
-            // Positive definite by the loading, so the factorisation exists.
+            // Hermitian positive definite by the loading, so the factorisation exists; with
+            // R = L Lᴴ, dᴴ R⁻¹ d = ‖L⁻¹ d‖², ≥ 0 by construction.
             let Some(chol) = loaded.cholesky() else {
+                self.loaded = DMatrix::zeros(n_mics, n_mics);
                 continue;
             };
-            let d = &self.manifold[k];
-            let solved = chol.solve(d);
+            self.solved.copy_from(&self.manifold[k]);
+            let solved = chol.l_dirty().solve_lower_triangular_mut(&mut self.solved);
+            self.loaded = chol.unpack_dirty();
+            if !solved {
+                continue;
+            }
             for (b, e) in energies.iter_mut().enumerate() {
-                // dᴴ R⁻¹ d, real and > 0 for a Hermitian positive definite R.
-                let q: f64 = d
-                    .column(b)
-                    .iter()
-                    .zip(solved.column(b).iter())
-                    .map(|(a, z)| (a.conj() * z).re)
-                    .sum();
-                *e += fd.bin_weight[k] * gain / q;
+                let q: f64 = self.solved.column(b).iter().map(|z| z.norm_sqr()).sum();
+                if q > 0.0 && q.is_finite() {
+                    *e += fd.bin_weight[k] * gain / q;
+                }
             }
         }
     }
 }
+
+/// Mean channel power per bin below which MVDR treats the bin as silent.
+const SILENT_POWER: f64 = 1e-150;

@@ -741,7 +741,7 @@ fn configs_reject_unknown_fields() {
 /// and every other bin nothing) makes R = p d₀d₀ᴴ with p = (L/2)², and with the loading
 /// δ = ε p Sherman-Morrison gives dᴴ(R + δI)⁻¹d = (M − p|dᴴd₀|²/(δ + pM))/δ for every beam,
 /// an independent route from the Cholesky solve. A second identical frame leaves the running
-/// covariance, and so every energy, unchanged; `reset` and `beamform` start afresh.
+/// covariance, and so every energy, unchanged.
 #[test]
 fn mvdr_energies_equal_the_closed_form_of_a_rank_one_covariance() {
     let array = MicArray::default();
@@ -794,8 +794,90 @@ fn mvdr_energies_equal_the_closed_form_of_a_rank_one_covariance() {
     for (a, b) in first.iter().zip(&second) {
         assert!((a - b).abs() <= 1e-9 * a, "{a} then {b}");
     }
+}
+
+/// The running covariance against a direct solve: a frame of a tone from θ₀, then one from
+/// θ₁ on the same bin, leave R = α p d₀d₀ᴴ + (1 − α) p d₁d₁ᴴ (α = `mvdr_forgetting`), whose
+/// loaded inverse the test takes by LU (not the beamformer's Cholesky) at every beam; after
+/// `reset`, the θ₁ frame alone gives the rank-one form of θ₁; and `beamform` starts afresh,
+/// so two passes over one recording give the same bytes.
+#[test]
+fn mvdr_remembers_earlier_frames_by_its_forgetting_factor_and_reset_forgets_them() {
+    use realfft::num_complex::Complex;
+    let array = MicArray::default();
+    let (l, k0) = (512usize, 64usize);
+    let fs = f64::from(FS);
+    let f0 = k0 as f64 * fs / l as f64;
+    let config = BeamformConfig {
+        method: Method::Mvdr,
+        window: Window::Rectangular,
+        band_hz: [1000.0, 3000.0],
+        mvdr_forgetting: 0.7,
+        mvdr_loading: 0.05,
+        ..BeamformConfig::default()
+    };
+    let tone = |theta: f64| -> Vec<Vec<f32>> {
+        array
+            .arrival_advances_s(theta, config.sound_speed_mps)
+            .iter()
+            .map(|tau| {
+                (0..l)
+                    .map(|n| (TAU * f0 * (n as f64 / fs + tau)).cos() as f32)
+                    .collect()
+            })
+            .collect()
+    };
+    let (theta0, theta1) = (50f64.to_radians(), 140f64.to_radians());
+    let (a, b) = (tone(theta0), tone(theta1));
+    let manifold = |theta: f64| -> nalgebra::DVector<Complex<f64>> {
+        nalgebra::DVector::from_iterator(
+            4,
+            array
+                .arrival_advances_s(theta, config.sound_speed_mps)
+                .into_iter()
+                .map(|tau| Complex::from_polar(1.0, TAU * f0 * tau)),
+        )
+    };
+    let p = (l as f64 / 2.0).powi(2);
+    let weight = 2.0 / (l * l) as f64;
+    // Energies of covariance p·Σ wᵢ dᵢdᵢᴴ (loaded with ε·tr/M) by LU at every beam.
+    let expected = |terms: &[(f64, f64)]| -> Vec<f64> {
+        let mut r = nalgebra::DMatrix::<Complex<f64>>::zeros(4, 4);
+        for &(w, theta) in terms {
+            let d = manifold(theta);
+            r += &d * d.adjoint() * Complex::new(w * p, 0.0);
+        }
+        let power = (0..4).map(|i| r[(i, i)].re).sum::<f64>() / 4.0;
+        for i in 0..4 {
+            r[(i, i)] += Complex::new(config.mvdr_loading * power, 0.0);
+        }
+        let lu = r.lu();
+        (0..config.n_beams)
+            .map(|beam| {
+                let d = manifold(TAU * beam as f64 / config.n_beams as f64);
+                let q = (d.adjoint() * lu.solve(&d).unwrap())[(0, 0)].re;
+                weight * 16.0 / q
+            })
+            .collect()
+    };
+    let close = |got: &[f64], want: &[f64]| {
+        for (beam, (g, w)) in got.iter().zip(want).enumerate() {
+            assert!((g - w).abs() <= 1e-5 * w, "beam {beam}: {g} against {w}");
+        }
+    };
+    let (a, b): (Vec<&[f32]>, Vec<&[f32]>) = (
+        a.iter().map(Vec::as_slice).collect(),
+        b.iter().map(Vec::as_slice).collect(),
+    );
+    let mut bf = config.check(&array).unwrap();
+    bf.frame_energies(&a).unwrap();
+    let both = bf.frame_energies(&b).unwrap();
+    close(&both, &expected(&[(0.7, theta0), (0.3, theta1)]));
     bf.reset();
-    assert_eq!(bf.frame_energies(&frame).unwrap(), first);
+    close(&bf.frame_energies(&b).unwrap(), &expected(&[(1.0, theta1)]));
+    let sources = [source_at(theta0, 20.0, SourceSignal::WhiteNoise)];
+    let rec = record(&sources, 0.2, None, 5);
+    assert_eq!(bf.beamform(&rec).unwrap(), bf.beamform(&rec).unwrap());
 }
 
 /// Two white-noise sources 25° apart at 30 dB, inside one of the 10 cm array's broad

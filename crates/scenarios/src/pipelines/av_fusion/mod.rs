@@ -89,6 +89,11 @@ pub struct AudioParams {
     ground_reflection: f64,
     /// The beamformer (36 beams).
     beamform: BeamformConfig,
+    /// The beamformer of the runs with more than one vehicle, if not `beamform` (the same
+    /// beams and sample rate): the switch of the MVDR experiment of docs/av-fusion.md; the
+    /// scenario leaves it unset.
+    #[serde(default)]
+    multi_beamform: Option<BeamformConfig>,
 }
 
 /// The cameras.
@@ -752,6 +757,17 @@ impl Pipeline for AvFusion {
                 env.seed
             );
         }
+        if let Some(multi) = &p.audio.multi_beamform {
+            ensure!(
+                (multi.n_beams, multi.sample_rate_hz)
+                    == (p.audio.beamform.n_beams, p.audio.beamform.sample_rate_hz),
+                "[params.audio.multi_beamform] must keep [params.audio.beamform]'s n_beams ({}) \
+                 and sample_rate_hz ({})",
+                p.audio.beamform.n_beams,
+                p.audio.beamform.sample_rate_hz
+            );
+            multi.check(&MicArray::default())?;
+        }
         let keys: Vec<String> = (0..APPROACHES.len()).map(settings_key).collect();
         for (k, table) in &p.multi_peak_scores {
             ensure!(
@@ -1388,6 +1404,21 @@ mod tests {
         p.settings.get_mut(5).scored = true;
         let err = checked(&p, 1801).expect_err("scored single").to_string();
         assert!(err.contains("multi-vehicle settings only"), "{err}");
+        // A multi-vehicle beamformer with other beams, or a bad one.
+        let mut p = good.clone();
+        p.audio.multi_beamform = Some(BeamformConfig {
+            n_beams: 18,
+            ..p.audio.beamform.clone()
+        });
+        let err = checked(&p, 1801).expect_err("other beams").to_string();
+        assert!(err.contains("multi_beamform"), "{err}");
+        p.audio.multi_beamform = Some(BeamformConfig {
+            method: sensors_audio::Method::Mvdr,
+            mvdr_forgetting: 1.5,
+            ..p.audio.beamform.clone()
+        });
+        let err = checked(&p, 1801).expect_err("bad forgetting").to_string();
+        assert!(err.contains("mvdr_forgetting"), "{err}");
         // The reported seed among the tuning seeds.
         let err = checked(&good, 2).expect_err("seed 2 tunes").to_string();
         assert!(err.contains("reported seed 2"), "{err}");

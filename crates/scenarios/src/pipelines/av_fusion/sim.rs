@@ -85,8 +85,13 @@ pub(super) fn audio_reports(
     rng: &mut ChaCha8Rng,
 ) -> Result<Vec<Report>> {
     let array = MicArray::default();
+    // `compute` checked that a multi-vehicle beamformer keeps the beams and sample rate.
+    let beamform = match &p.audio.multi_beamform {
+        Some(multi) if run.vehicles.len() > 1 => multi,
+        _ => &p.audio.beamform,
+    };
     let sim = SimulationConfig {
-        sample_rate_hz: p.audio.beamform.sample_rate_hz,
+        sample_rate_hz: beamform.sample_rate_hz,
         ground_reflection: Some(p.audio.ground_reflection),
         noise: Some(BackgroundNoise {
             snr_db: p.audio.snr_db,
@@ -118,7 +123,7 @@ pub(super) fn audio_reports(
         })
         .collect();
     let mut reports = Vec::new();
-    let mut beamformer = p.audio.beamform.check(&array)?;
+    let mut beamformer = beamform.check(&array)?;
     for (i, pose) in audio_poses().iter().enumerate() {
         let rec = simulate(&array, pose, &sources, run.duration_s, &sim, rng)?;
         for bf in beamformer.beamform(&rec)? {
