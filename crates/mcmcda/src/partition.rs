@@ -226,16 +226,17 @@ impl<'a> Partition<'a> {
 
     /// Adds a track (assumed feasible), filtering it from the first `keep` nodes of `prefix`.
     pub(crate) fn insert(&mut self, meas: Vec<MeasId>, prefix: Option<(&[Node], usize)>) {
+        let prefix = prefix.map_or(&[][..], |(old, keep)| &old[..keep.min(old.len())]);
+        let track = self.filtered_after(meas, prefix);
+        self.reinsert(track);
+    }
+
+    /// [`Self::filtered`] from a copy of `prefix`, the nodes of the track's first
+    /// measurements.
+    pub(crate) fn filtered_after(&self, meas: Vec<MeasId>, prefix: &[Node]) -> TrackState {
         let mut nodes = Vec::with_capacity(meas.len());
-        let keep = match prefix {
-            Some((old, keep)) => {
-                let keep = keep.min(old.len());
-                nodes.extend_from_slice(&old[..keep]);
-                keep
-            }
-            None => 0,
-        };
-        self.insert_into(meas, nodes, keep);
+        nodes.extend_from_slice(prefix);
+        self.filtered(meas, nodes, prefix.len())
     }
 
     /// Adds a track (assumed feasible) whose first `keep` nodes are already in `nodes` (the

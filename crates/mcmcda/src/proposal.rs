@@ -272,13 +272,28 @@ impl Partition<'_> {
         if n_births == 0 || n_second == 0 {
             return f64::NEG_INFINITY;
         }
+        let log_grow =
+            self.log_grow_probability(track[1], End::Tail, &track[2..], FirstStep::MayStop);
+        self.log_birth_probability_given(d1, n_births, n_second, log_grow)
+    }
+
+    /// [`Self::log_birth_probability`] of a track whose first gap is `d1`, from the counts
+    /// |L^B(t₁, d₁)| and |C₂| and the log probability of growing the rest: the birth move
+    /// passes what its draws found, so both give the same bits.
+    pub(crate) fn log_birth_probability_given(
+        &self,
+        d1: usize,
+        n_births: usize,
+        n_second: usize,
+        log_grow: f64,
+    ) -> f64 {
         self.model
             .log_move_probability(Move::Birth, self.n_tracks())
             - ln_count(self.n_scans() - 1)
             + self.model.log_zeta[d1 - 1]
             - ln_count(n_births)
             - ln_count(n_second)
-            + self.log_grow_probability(track[1], End::Tail, &track[2..], FirstStep::MayStop)
+            + log_grow
     }
 
     /// |S(ω)|: the split points (k, i) with |τ_k| ≥ 4 and both parts keeping ≥ 2.

@@ -325,16 +325,10 @@ impl<'a, R: Rng> Chain<'a, R> {
                 &mut self.rng,
             )
             .unwrap_or(f64::NEG_INFINITY);
-        // q of this birth from the draws just made (the terms of `log_birth_probability`,
-        // summed in its order, so equal to it to the bit), instead of recounting every
-        // candidate set: only the stop at the last measurement is evaluated.
+        // q of this birth from the draws just made, instead of recounting every candidate
+        // set: only the stop at the last measurement is evaluated.
         let log_grow = log_steps + s.log_stop_at(track[track.len() - 1], End::Tail);
-        let log_q_forward = s.model.log_move_probability(Move::Birth, s.n_tracks())
-            - ln_count(n_scans - 1)
-            + s.model.log_zeta[d1 - 1]
-            - ln_count(n_births)
-            - ln_count(n_second)
-            + log_grow;
+        let log_q_forward = s.log_birth_probability_given(d1, n_births, n_second, log_grow);
         #[cfg(test)]
         assert_eq!(
             log_q_forward.to_bits(),
@@ -357,13 +351,11 @@ impl<'a, R: Rng> Chain<'a, R> {
         let victim = self.rng.random_range(0..k);
         let log_q_forward = self.state.model.log_move_probability(Move::Death, k) - ln_count(k);
         let old = self.state.remove(victim);
-        // The reverse birth's q is at most ξ(birth) · 1/(T − 1) · ζ(d₁) (its candidate
-        // counts are ≥ 1 and its growth a probability): evaluated only if that can accept.
+        // The reverse birth's q is at most its value with both candidate counts at 1 and a
+        // growth of probability 1: evaluated only if that can accept.
         let s = &self.state;
         let d1 = s.problem.scan_of(old.meas[1]) - s.problem.scan_of(old.meas[0]);
-        let log_q_reverse_at_most = s.model.log_move_probability(Move::Birth, k - 1)
-            - ln_count(s.n_scans() - 1)
-            + s.model.log_zeta[d1 - 1];
+        let log_q_reverse_at_most = s.log_birth_probability_given(d1, 1, 1, 0.0);
         let bound = -old.weight + log_q_reverse_at_most - log_q_forward;
         if let Bounded::Undecided { log_u } = self.draw_against_bound(bound) {
             let log_q_reverse = self.state.log_birth_probability(&old.meas);
@@ -590,16 +582,14 @@ impl<'a, R: Rng> Chain<'a, R> {
         // (a head move changes most of it) the short kept prefix is copied.
         let mut old = old;
         let handed_over = keep >= old.nodes.len() - keep;
-        let nodes = if handed_over {
+        let candidate = if handed_over {
             self.saved_nodes.clear();
             self.saved_nodes.extend_from_slice(&old.nodes[keep..]);
-            std::mem::take(&mut old.nodes)
+            let nodes = std::mem::take(&mut old.nodes);
+            self.state.filtered(new, nodes, keep)
         } else {
-            let mut nodes = Vec::with_capacity(new.len());
-            nodes.extend_from_slice(&old.nodes[..keep]);
-            nodes
+            self.state.filtered_after(new, &old.nodes[..keep])
         };
-        let candidate = self.state.filtered(new, nodes, keep);
         let delta = candidate.weight - old.weight;
         let model = self.state.model;
         let log_q_reverse_at_most = (model.move_probability(Move::Extension, k)

@@ -298,12 +298,11 @@ enum Engine {
 #[derive(Clone)]
 struct Mvdr {
     freq: FreqDomain,
-    /// Each bin's array manifold, d_{k,b,m} = e^{+j2πf_kτ_{m,b}} (the conjugate steering
-    /// phases), as an M × B matrix per bin.
-    manifold: Vec<DMatrix<Complex<f64>>>,
     /// Running covariance per bin, M × M.
     cov: Vec<DMatrix<Complex<f64>>>,
-    /// Scratch: the loaded covariance and its Cholesky factor (M × M), and L⁻¹ d (M × B).
+    /// Scratch: the loaded covariance and its Cholesky factor (M × M), and the bin's array
+    /// manifold d_{k,b,m} = e^{+j2πf_kτ_{m,b}} (the conjugate steering phases), then L⁻¹ d
+    /// (M × B).
     loaded: DMatrix<Complex<f64>>,
     solved: DMatrix<Complex<f64>>,
     /// Whether `cov` holds a frame yet.
@@ -545,16 +544,7 @@ impl BeamformConfig {
         }
         tracker_model::ensure_in_range(self.mvdr_loading, 1e-9, 1e9, "mvdr_loading")?;
         let (n_beams, n_bins) = (self.n_beams, freq.n_bins);
-        let per_beam = n_bins * n_mics;
-        let manifold = (0..n_bins)
-            .map(|k| {
-                DMatrix::from_fn(n_mics, n_beams, |m, b| {
-                    freq.steer[b * per_beam + k * n_mics + m].conj()
-                })
-            })
-            .collect();
         Ok(Mvdr {
-            manifold,
             cov: vec![DMatrix::zeros(n_mics, n_mics); n_bins],
             loaded: DMatrix::zeros(n_mics, n_mics),
             solved: DMatrix::zeros(n_mics, n_beams),
@@ -775,7 +765,14 @@ impl Mvdr {
                 self.loaded = DMatrix::zeros(n_mics, n_mics);
                 continue;
             };
-            self.solved.copy_from(&self.manifold[k]);
+            // The manifold, column b = beam b's conjugate steering phases at bin k.
+            let per_beam = fd.n_bins * n_mics;
+            for (b, mut column) in self.solved.column_iter_mut().enumerate() {
+                let steer = &fd.steer[b * per_beam + k * n_mics..][..n_mics];
+                for (d, s) in column.iter_mut().zip(steer) {
+                    *d = s.conj();
+                }
+            }
             let solved = chol.l_dirty().solve_lower_triangular_mut(&mut self.solved);
             self.loaded = chol.unpack_dirty();
             if !solved {
