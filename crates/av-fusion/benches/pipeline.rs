@@ -117,6 +117,7 @@ fn config(rule: FusionRule) -> AvConfig {
             cell_size_m: 0.5,
             max_range_m: None,
             min_range_m: 0.5,
+            range_fade: None,
             rule,
             modalities: Modalities::Both,
             peaks: PeakExtraction {

@@ -133,6 +133,43 @@ impl Default for PeakExtraction {
     }
 }
 
+/// A sensor's evidence about a cell fades with the cell's distance r from it, by
+/// g(r) = min(1, (r₀ / r)^q): a far vehicle is heard or seen weakly, so a profile that shows
+/// nothing towards a far cell says little against it. With several vehicles the nodes near a
+/// loud one see only it, and under the plain product their floor-level values towards a
+/// distant vehicle veto that vehicle's cell, which the nodes near it support (our choice; the
+/// paper's grid is not known to us). Each sensor's contribution is taken relative to its
+/// average cell — under the product g·w·(ln t(c) − mean ln t), t(c) the floored term; under the
+/// sum w·(m + g·(L(c) − m)), m the mean scaled value — so a faded sensor tends to neutral,
+/// not to its best or worst value. Without a fade the subtraction only shifts every cell
+/// alike and is not made.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RangeFade {
+    /// r₀, metres (> 0): full weight within it.
+    pub full_weight_m: f64,
+    /// q (> 0): how fast the weight falls beyond r₀.
+    pub power: f64,
+}
+
+impl RangeFade {
+    /// Checks r₀ and q.
+    pub fn check(&self) -> Result<()> {
+        ensure_positive(self.full_weight_m, "full_weight_m")?;
+        ensure_positive(self.power, "power")?;
+        Ok(())
+    }
+
+    /// g(r).
+    pub fn factor(&self, r: f64) -> f64 {
+        if r <= self.full_weight_m {
+            1.0
+        } else {
+            (self.full_weight_m / r).powf(self.power)
+        }
+    }
+}
+
 /// The grid, the rule and the peaks.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -145,6 +182,10 @@ pub struct FusionConfig {
     pub max_range_m: Option<f64>,
     /// Cells nearer than this to a sensor get nothing from it (the bearing is undefined there).
     pub min_range_m: f64,
+    /// Each sensor's evidence fades with the cell's distance from it (`None`: it counts the
+    /// same everywhere; see [`RangeFade`]).
+    #[serde(default)]
+    pub range_fade: Option<RangeFade>,
     /// How grids combine.
     pub rule: FusionRule,
     /// Which modalities take part.
@@ -163,6 +204,9 @@ impl FusionConfig {
             min_range_m: self.min_range_m,
         }
         .check()?;
+        if let Some(fade) = &self.range_fade {
+            fade.check()?;
+        }
         if let FusionRule::Product { floor } = self.rule
             && !(floor.is_finite() && (0.0..1.0).contains(&floor))
         {
@@ -227,11 +271,63 @@ pub struct FusedScan {
 
 /// Projects the snapshot's profiles of `sensors` onto the grid, fuses them and extracts the
 /// peaks. Sensors are projected in parallel and combined in sensor order, so the result does
-/// not depend on the thread count. `config` must have passed [`FusionConfig::check`].
+/// not depend on the thread count. `config` must have passed [`FusionConfig::check`]. With a
+/// [`RangeFade`], each call computes every sensor's fade over the grid; [`crate::AvPipeline`]
+/// computes them once.
 pub fn fuse_snapshot(
     sensors: &[SensorNode],
     snapshot: &Snapshot<'_>,
     config: &FusionConfig,
+) -> Result<FusedScan> {
+    fuse_snapshot_with(
+        sensors,
+        snapshot,
+        config,
+        &RangeFades::new(sensors, config)?,
+    )
+}
+
+/// Each sensor's fade g(r) = min(1, (r₀ / r)^q) over the grid's cells, by sensor index (all
+/// `None` when the fade is off): fixed while the sensors' believed poses are.
+pub(crate) struct RangeFades {
+    by_sensor: Vec<Option<Vec<f64>>>,
+}
+
+impl RangeFades {
+    pub(crate) fn new(sensors: &[SensorNode], config: &FusionConfig) -> Result<Self> {
+        let Some(fade) = config.range_fade else {
+            return Ok(Self {
+                by_sensor: vec![None; sensors.len()],
+            });
+        };
+        let grid = LikelihoodGrid::zeros(config.region, config.cell_size_m)?;
+        let (cols, rows) = grid.shape();
+        let by_sensor = sensors
+            .iter()
+            .map(|node| {
+                let at = node.pose.position;
+                let cells = (0..rows).flat_map(|r| (0..cols).map(move |c| (c, r)));
+                Some(
+                    cells
+                        .map(|(c, r)| fade.factor((grid.cell_centre(c, r) - at).norm()))
+                        .collect(),
+                )
+            })
+            .collect();
+        Ok(Self { by_sensor })
+    }
+
+    fn of(&self, sensor: usize) -> Option<&[f64]> {
+        self.by_sensor.get(sensor).and_then(|f| f.as_deref())
+    }
+}
+
+/// [`fuse_snapshot`] with the sensors' fades computed beforehand.
+pub(crate) fn fuse_snapshot_with(
+    sensors: &[SensorNode],
+    snapshot: &Snapshot<'_>,
+    config: &FusionConfig,
+    fades: &RangeFades,
 ) -> Result<FusedScan> {
     let projection = config.projection();
     let chosen: Vec<_> = snapshot
@@ -255,14 +351,15 @@ pub fn fuse_snapshot(
             Ok((s.sensor, node.weight, grid))
         })
         .collect::<Result<_>>()?;
-    let grid = fuse_grids(
-        config.region,
-        config.cell_size_m,
-        grids.iter().map(|(_, w, g)| (g, *w)),
+    let mut grid = LikelihoodGrid::zeros(config.region, config.cell_size_m)?;
+    let fused = fuse_values(
+        grid.values().len(),
+        grids.iter().map(|(s, w, g)| (g.values(), *w, fades.of(*s))),
         config.rule,
     )?;
+    fill(&mut grid, fused)?;
     let peaks = if config.peaks.explain_away_deg > 0.0 {
-        explain_away(sensors, &grids, &grid, config)?
+        explain_away(sensors, &grids, fades, &grid, config)?
     } else {
         extract_peaks(&grid, &config.peaks)?
     };
@@ -280,6 +377,7 @@ pub fn fuse_snapshot(
 fn explain_away(
     sensors: &[SensorNode],
     grids: &[(usize, f64, LikelihoodGrid)],
+    fades: &RangeFades,
     fused: &LikelihoodGrid,
     config: &FusionConfig,
 ) -> Result<Vec<PeakMeasurement>> {
@@ -313,23 +411,19 @@ fn explain_away(
                     *v *= 1.0 - (-0.5 * off * off).exp();
                 }
             });
-        let mut grid = LikelihoodGrid::zeros(config.region, config.cell_size_m)?;
         let Some(acc) = fuse_values(
             cols * rows,
             residual
                 .iter()
                 .zip(grids)
-                .map(|(v, (_, w, _))| (v.as_slice(), *w)),
+                .map(|(v, (s, w, _))| (v.as_slice(), *w, fades.of(*s))),
             config.rule,
         )?
         else {
             break;
         };
-        for row in 0..rows {
-            for col in 0..cols {
-                grid.set(col, row, acc[row * cols + col])?;
-            }
-        }
+        let mut grid = LikelihoodGrid::zeros(config.region, config.cell_size_m)?;
+        fill(&mut grid, Some(acc))?;
         let r2 = pc.suppression_radius_m * pc.suppression_radius_m;
         let next = extract_peaks(
             &grid,
@@ -365,12 +459,12 @@ fn explain_away(
 /// by `rule`; `None` when no slice carries evidence.
 fn fuse_values<'a>(
     n: usize,
-    grids: impl IntoIterator<Item = (&'a [f64], f64)>,
+    grids: impl IntoIterator<Item = (&'a [f64], f64, Option<&'a [f64]>)>,
     rule: FusionRule,
 ) -> Result<Option<Vec<f64>>> {
     let mut acc = vec![0.0; n];
     let mut any = false;
-    for (v, w) in grids {
+    for (v, w, fade) in grids {
         ensure_non_negative(w, "fusion weight")?;
         match rule {
             FusionRule::WeightedSum { scaling } => {
@@ -381,7 +475,16 @@ fn fuse_values<'a>(
                 if total > 0.0 && w > 0.0 {
                     any = true;
                     let k = w / total;
-                    acc.iter_mut().zip(v).for_each(|(a, x)| *a += k * x);
+                    match fade {
+                        None => acc.iter_mut().zip(v).for_each(|(a, x)| *a += k * x),
+                        Some(f) => {
+                            let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+                            acc.iter_mut()
+                                .zip(v)
+                                .zip(f)
+                                .for_each(|((a, x), g)| *a += k * (mean + g * (x - mean)));
+                        }
+                    }
                 }
             }
             FusionRule::Product { floor } => {
@@ -389,9 +492,19 @@ fn fuse_values<'a>(
                 if max > 0.0 && w > 0.0 {
                     any = true;
                     let scale = (1.0 - floor) / max;
-                    acc.iter_mut()
-                        .zip(v)
-                        .for_each(|(a, x)| *a += w * (floor + scale * x).ln());
+                    match fade {
+                        None => acc
+                            .iter_mut()
+                            .zip(v)
+                            .for_each(|(a, x)| *a += w * (floor + scale * x).ln()),
+                        Some(f) => {
+                            let mean = v.iter().map(|x| (floor + scale * x).ln()).sum::<f64>()
+                                / v.len().max(1) as f64;
+                            acc.iter_mut().zip(v).zip(f).for_each(|((a, x), g)| {
+                                *a += g * w * ((floor + scale * x).ln() - mean)
+                            });
+                        }
+                    }
                 }
             }
         }
@@ -430,17 +543,25 @@ pub fn fuse_grids<'a>(
             )
             .into());
         }
-        checked.push((g.values(), w));
+        checked.push((g.values(), w, None));
     }
-    let Some(acc) = fuse_values(cols * rows, checked, rule)? else {
-        return Ok(out);
+    let fused = fuse_values(cols * rows, checked, rule)?;
+    fill(&mut out, fused)?;
+    Ok(out)
+}
+
+/// Sets `grid`'s cells (row-major) to `values`; `None` leaves it as it is.
+fn fill(grid: &mut LikelihoodGrid, values: Option<Vec<f64>>) -> Result<()> {
+    let Some(values) = values else {
+        return Ok(());
     };
+    let (cols, rows) = grid.shape();
     for row in 0..rows {
         for col in 0..cols {
-            out.set(col, row, acc[row * cols + col])?;
+            grid.set(col, row, values[row * cols + col])?;
         }
     }
-    Ok(out)
+    Ok(())
 }
 
 /// The peaks of a grid as measurements (see [`PeakExtraction`]).

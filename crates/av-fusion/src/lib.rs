@@ -69,6 +69,7 @@
 //!         cell_size_m: 0.5,
 //!         max_range_m: None,
 //!         min_range_m: 0.5,
+//!         range_fade: None,
 //!         rule: FusionRule::Product { floor: 0.05 },
 //!         modalities: Modalities::Both,
 //!         peaks: PeakExtraction::default(),
@@ -118,8 +119,8 @@ pub use buffer::{
 };
 pub use error::{Error, Result};
 pub use fusion::{
-    FusedScan, FusionConfig, FusionRule, Modalities, PeakExtraction, PeakMeasurement, SumScaling,
-    extract_peaks, fuse_grids, fuse_snapshot,
+    FusedScan, FusionConfig, FusionRule, Modalities, PeakExtraction, PeakMeasurement, RangeFade,
+    SumScaling, extract_peaks, fuse_grids, fuse_snapshot,
 };
 pub use node::{LobeEqualisation, ProfileShape, Report, SensorKind, SensorNode};
 pub use tracker::{AvConfig, AvPipeline, AvRun, PeakScores, TrackerConfig, track_reports};

@@ -54,6 +54,7 @@ fn fusion_config(rule: FusionRule) -> FusionConfig {
         cell_size_m: 0.5,
         max_range_m: None,
         min_range_m: 0.5,
+        range_fade: None,
         rule,
         modalities: Modalities::Both,
         peaks: PeakExtraction::default(),
@@ -744,4 +745,139 @@ fn explaining_away_finds_the_second_target_with_the_first_removed() {
     );
     config.peaks.explain_away_deg = -1.0;
     assert!(config.check().is_err());
+}
+
+// ---------------------------------------------------------------- range fade
+
+/// A 360-bin profile that is 1 on the bins `lo..=hi` (degrees) and `low` elsewhere.
+fn plateau(lo: usize, hi: usize, low: f64) -> Vec<f64> {
+    (0..360)
+        .map(|b| if (lo..=hi).contains(&b) { 1.0 } else { low })
+        .collect()
+}
+
+#[test]
+fn range_fade_weighs_each_sensor_by_distance_by_hand() {
+    // Two cells of 1 m, centres c1 = (0.5, 0.5) and c2 = (1.5, 0.5). Sensor a at (0.5, −3.5)
+    // sees c1 at 90° and c2 at atan2(4, 1) = 75.96°; its plateau on 70..=80° gives c1 the low
+    // value 0.2 and c2 the full 1. Sensor b at (1.5, 4.5) sees c1 at 255.96° and c2 at 270°;
+    // its plateau on 250..=260° gives c1 1 and c2 0.2. Distances: a–c1 = b–c2 = 4,
+    // a–c2 = b–c1 = √17. Fade r₀ = 1 m, q = 2: g = 1/r².
+    let mut a = SensorNode::audio("a", pose(0.5, -3.5, 0.0), 360);
+    let mut b = SensorNode::audio("b", pose(1.5, 4.5, 0.0), 360);
+    a.weight = 1.0;
+    b.weight = 0.5;
+    let mut node = FusionNode::new(vec![a, b], scheduler()).expect("valid node");
+    node.receive(report(0, 0.0, plateau(70, 80, 0.2)))
+        .expect("ok");
+    node.receive(report(1, 0.0, plateau(250, 260, 0.2)))
+        .expect("ok");
+    let fade = RangeFade {
+        full_weight_m: 1.0,
+        power: 2.0,
+    };
+    let (near, far) = (1.0 / 16.0, 1.0 / 17.0);
+    let (w_a, w_b) = (1.0, 0.5);
+    let (l_a, l_b) = ([0.2, 1.0], [1.0, 0.2]); // scaled values at c1, c2
+    let (g_a, g_b) = ([near, far], [far, near]);
+    let normalised = |x: [f64; 2]| [x[0] / (x[0] + x[1]), x[1] / (x[0] + x[1])];
+    let fused = |rule: FusionRule| {
+        let mut config = fusion_config(rule);
+        config.region = Region2::new(Vec2::zeros(), Vec2::new(2.0, 1.0)).expect("region");
+        config.cell_size_m = 1.0;
+        config.peaks.border_cells = 0;
+        config.range_fade = Some(fade);
+        let scan = fuse_snapshot(node.sensors(), &node.snapshot(0), &config).expect("fuses");
+        [scan.grid.value(0, 0), scan.grid.value(1, 0)]
+    };
+    // Product, ε = 0.1: t = ε + (1 − ε) L; each sensor adds g w (ln t − mean ln t).
+    let eps = 0.1;
+    let log_term = |l: [f64; 2], g: [f64; 2], w: f64, i: usize| {
+        let t = [eps + (1.0 - eps) * l[0], eps + (1.0 - eps) * l[1]];
+        let mean = (t[0].ln() + t[1].ln()) / 2.0;
+        g[i] * w * (t[i].ln() - mean)
+    };
+    let want =
+        normalised([0, 1].map(|i| (log_term(l_a, g_a, w_a, i) + log_term(l_b, g_b, w_b, i)).exp()));
+    let got = fused(FusionRule::Product { floor: eps });
+    for (g, w) in got.iter().zip(want) {
+        assert!((g - w).abs() < 1e-12, "product {got:?} against {want:?}");
+    }
+    // Without the fade b's half weight would make c2 (a's cell) the stronger; with it each
+    // cell is weighed most by its nearer sensor, and c2 still wins, by less.
+    assert!(got[1] > got[0]);
+    // Weighted sum (max scaling): each sensor adds w (m + g (L − m)), m the mean scaled value.
+    let sum_term = |l: [f64; 2], g: [f64; 2], w: f64, i: usize| {
+        let m = (l[0] + l[1]) / 2.0;
+        w * (m + g[i] * (l[i] - m))
+    };
+    let want = normalised([0, 1].map(|i| sum_term(l_a, g_a, w_a, i) + sum_term(l_b, g_b, w_b, i)));
+    let got = fused(FusionRule::WeightedSum {
+        scaling: SumScaling::Max,
+    });
+    for (g, w) in got.iter().zip(want) {
+        assert!((g - w).abs() < 1e-12, "sum {got:?} against {want:?}");
+    }
+}
+
+#[test]
+fn a_fade_that_covers_the_region_changes_nothing() {
+    // r₀ beyond every cell: g = 1 everywhere, and the per-sensor mean is a shift of every
+    // cell alike, so the fused grid is the unfaded one.
+    let s1 = SensorNode::audio("a", pose(2.0, 1.0, 0.0), 360);
+    let s2 = SensorNode::audio("b", pose(33.0, 1.5, 0.0), 360);
+    let mut node = FusionNode::new(vec![s1.clone(), s2.clone()], scheduler()).expect("node");
+    node.receive(report(0, 0.0, bump(&s1, 30.0 * DEG, 5.0 * DEG)))
+        .expect("ok");
+    node.receive(report(1, 0.0, bump(&s2, 150.0 * DEG, 5.0 * DEG)))
+        .expect("ok");
+    for rule in [
+        FusionRule::Product { floor: 0.05 },
+        FusionRule::WeightedSum {
+            scaling: SumScaling::Max,
+        },
+    ] {
+        let plain = fusion_config(rule);
+        let faded = FusionConfig {
+            range_fade: Some(RangeFade {
+                full_weight_m: 100.0,
+                power: 3.0,
+            }),
+            ..plain.clone()
+        };
+        let x = fuse_snapshot(node.sensors(), &node.snapshot(0), &plain).expect("fuses");
+        let y = fuse_snapshot(node.sensors(), &node.snapshot(0), &faded).expect("fuses");
+        // Equal to rounding: the sum adds and removes the mean, so the error is relative to
+        // the grid's largest value, not to each cell's.
+        let top = x.grid.values().iter().copied().fold(0.0, f64::max);
+        for (p, q) in x.grid.values().iter().zip(y.grid.values()) {
+            assert!((p - q).abs() <= 1e-12 * top, "{rule:?}: {p} against {q}");
+        }
+        assert_eq!(x.peaks.len(), y.peaks.len());
+    }
+}
+
+#[test]
+fn range_fade_factor_and_bad_settings() {
+    let f = RangeFade {
+        full_weight_m: 8.0,
+        power: 0.5,
+    };
+    assert_eq!(f.factor(3.0), 1.0);
+    assert_eq!(f.factor(8.0), 1.0);
+    assert!((f.factor(32.0) - 0.5).abs() < 1e-15); // (8/32)^½
+    for (r0, q) in [
+        (0.0, 1.0),
+        (-1.0, 1.0),
+        (f64::NAN, 1.0),
+        (5.0, 0.0),
+        (5.0, f64::INFINITY),
+    ] {
+        let mut config = fusion_config(FusionRule::Product { floor: 0.1 });
+        config.range_fade = Some(RangeFade {
+            full_weight_m: r0,
+            power: q,
+        });
+        assert!(config.check().is_err(), "r₀ {r0}, q {q} accepted");
+    }
 }

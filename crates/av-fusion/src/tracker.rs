@@ -8,7 +8,7 @@ use tracker_model::{Frame, FrameClock, TrackSet};
 
 use crate::buffer::{Arrival, FusionNode, SchedulerConfig};
 use crate::error::{Error, Result, invalid};
-use crate::fusion::{FusedScan, FusionConfig, fuse_snapshot};
+use crate::fusion::{FusedScan, FusionConfig, RangeFades, fuse_snapshot_with};
 use crate::node::{Report, SensorNode};
 
 /// The tracker: the MCMCDA model (its motion period must be the scheduler's period), the
@@ -131,6 +131,8 @@ impl AvConfig {
 pub struct AvPipeline {
     node: FusionNode,
     fusion: FusionConfig,
+    /// Each sensor's range fade over the grid, computed once.
+    fades: RangeFades,
     peak_scores: Option<PeakScores>,
     tracker: OnlineTracker,
     clock: FrameClock,
@@ -143,10 +145,12 @@ impl AvPipeline {
         config.check()?;
         let model = config.tracker.mcmcda.check()?;
         let node = FusionNode::new(sensors, config.scheduler)?;
+        let fades = RangeFades::new(node.sensors(), &config.fusion)?;
         let clock = FrameClock::new(config.scheduler.start_s, config.scheduler.period_s())?;
         Ok(Self {
             node,
             fusion: config.fusion.clone(),
+            fades,
             peak_scores: config.tracker.peak_scores.clone(),
             tracker: OnlineTracker::new(model, 0, config.tracker.online, config.tracker.seed)?,
             clock,
@@ -184,7 +188,12 @@ impl AvPipeline {
             });
         }
         let frame = Frame::try_from(k).map_err(|_| invalid("tick", format!("{k} exceeds u32")))?;
-        let scan = fuse_snapshot(self.node.sensors(), &self.node.snapshot(k), &self.fusion)?;
+        let scan = fuse_snapshot_with(
+            self.node.sensors(),
+            &self.node.snapshot(k),
+            &self.fusion,
+            &self.fades,
+        )?;
         let points: Vec<_> = scan.peaks.iter().map(|p| p.position).collect();
         let step = match &self.peak_scores {
             None => self.tracker.push_scan(frame, &points)?,

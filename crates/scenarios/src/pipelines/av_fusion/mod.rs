@@ -15,7 +15,8 @@ use std::f64::consts::PI;
 use anyhow::{Result, ensure};
 use av_fusion::{
     AvConfig, FusionConfig, FusionRule, LobeEqualisation, Modalities, PeakExtraction, PeakScores,
-    Report, SchedulerConfig, SensorKind, SensorNode, SumScaling, TrackerConfig, track_reports,
+    RangeFade, Report, SchedulerConfig, SensorKind, SensorNode, SumScaling, TrackerConfig,
+    track_reports,
 };
 use eval_metrics::{EvalConfig, MatchConfig, OspaConfig, evaluate, mean_error_per_track};
 use mcmcda::{McmcdaConfig, OnlineConfig};
@@ -178,6 +179,9 @@ pub struct ApproachSettings {
     /// `[params.multi_peak_scores]` (which must then exist; false: every peak counts the same).
     #[serde(default)]
     scored: bool,
+    /// Each sensor's evidence fades with range (`None`: off; see `av_fusion::RangeFade`).
+    #[serde(default)]
+    range_fade: Option<RangeFade>,
 }
 
 fn one() -> f64 {
@@ -279,6 +283,9 @@ pub struct MultiTuning {
     /// MCMCDA's speed limit v̄ (m/s) and largest gap d̄ (scans).
     max_speed: Vec<f64>,
     max_gap: Vec<u32>,
+    /// The range fade's r₀ (m; 0: off) and power q.
+    fade_full_weight_m: Vec<f64>,
+    fade_power: Vec<f64>,
     max_rounds: usize,
 }
 
@@ -501,6 +508,7 @@ fn av_config(
             cell_size_m: p.cell_size_m,
             max_range_m: None,
             min_range_m: 0.5,
+            range_fade: s.range_fade,
             rule,
             modalities,
             peaks: PeakExtraction {

@@ -623,6 +623,23 @@ pub(super) fn lobes_with(
     (next.power > 0.0).then_some(next)
 }
 
+/// The range fade with r₀ or q replaced (r₀ = 0: off; off takes q = 1 when turned on).
+pub(super) fn fade_with(
+    f: Option<RangeFade>,
+    full_weight_m: Option<f64>,
+    power: Option<f64>,
+) -> Option<RangeFade> {
+    let base = f.unwrap_or(RangeFade {
+        full_weight_m: 0.0,
+        power: 1.0,
+    });
+    let next = RangeFade {
+        full_weight_m: full_weight_m.unwrap_or(base.full_weight_m),
+        power: power.unwrap_or(base.power),
+    };
+    (next.full_weight_m > 0.0).then_some(next)
+}
+
 #[expect(
     clippy::print_stderr,
     reason = "the search takes minutes: each line goes to the terminal as it is measured"
@@ -712,6 +729,12 @@ pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()
             t.max_gap.iter().map(|&d| f64::from(d)).collect(),
             |s, v| s.max_gap = Some(v as u32),
         ));
+        coords.push(("fade range", t.fade_full_weight_m.clone(), |s, v| {
+            s.range_fade = fade_with(s.range_fade, Some(v), None);
+        }));
+        coords.push(("fade power", t.fade_power.clone(), |s, v| {
+            s.range_fade = fade_with(s.range_fade, None, Some(v));
+        }));
         coords.insert(
             0,
             ("explain away", t.explain_away_deg.clone(), |s, v| {
