@@ -8,8 +8,8 @@ use std::f64::consts::TAU;
 use std::hint::black_box;
 
 use av_fusion::{
-    AvConfig, FusionConfig, FusionRule, Modalities, PeakExtraction, ProfileShape, Report,
-    SchedulerConfig, SensorKind, SensorNode, SumScaling, TrackerConfig, track_reports,
+    AvConfig, FusionConfig, FusionRule, Modalities, PeakExtraction, ProfileShape, RangeFade,
+    Report, SchedulerConfig, SensorKind, SensorNode, SumScaling, TrackerConfig, track_reports,
 };
 use criterion::{Criterion, criterion_group, criterion_main};
 use mcmcda::{McmcdaConfig, OnlineConfig};
@@ -157,16 +157,29 @@ fn bench(c: &mut Criterion) {
     let nodes = sensors();
     let reps = reports(&nodes, &mut rng);
     let mut group = c.benchmark_group("av_fusion_pass_4s_9_sensors");
-    for (name, rule) in [
-        ("product", FusionRule::Product { floor: 0.05 }),
+    // The range fade (the multi-vehicle scenario's audio+video product: r₀ = 8 m, q = ½)
+    // adds a per-sensor subtraction per cell; its maps are computed once per pipeline.
+    let fade = Some(RangeFade {
+        full_weight_m: 8.0,
+        power: 0.5,
+    });
+    for (name, rule, range_fade) in [
+        ("product", FusionRule::Product { floor: 0.05 }, None),
         (
             "weighted_sum",
             FusionRule::WeightedSum {
                 scaling: SumScaling::Max,
             },
+            None,
+        ),
+        (
+            "product_range_fade",
+            FusionRule::Product { floor: 0.05 },
+            fade,
         ),
     ] {
-        let cfg = config(rule);
+        let mut cfg = config(rule);
+        cfg.fusion.range_fade = range_fade;
         group.bench_function(name, |b| {
             b.iter(|| {
                 let run = track_reports(nodes.clone(), reps.clone(), 40, &cfg).expect("runs");

@@ -464,6 +464,7 @@ fn fuse_values<'a>(
 ) -> Result<Option<Vec<f64>>> {
     let mut acc = vec![0.0; n];
     let mut any = false;
+    let mut logs = Vec::new();
     for (v, w, fade) in grids {
         ensure_non_negative(w, "fusion weight")?;
         match rule {
@@ -498,11 +499,14 @@ fn fuse_values<'a>(
                             .zip(v)
                             .for_each(|(a, x)| *a += w * (floor + scale * x).ln()),
                         Some(f) => {
-                            let mean = v.iter().map(|x| (floor + scale * x).ln()).sum::<f64>()
-                                / v.len().max(1) as f64;
-                            acc.iter_mut().zip(v).zip(f).for_each(|((a, x), g)| {
-                                *a += g * w * ((floor + scale * x).ln() - mean)
-                            });
+                            // The logarithms once, into a buffer shared by the sensors.
+                            logs.clear();
+                            logs.extend(v.iter().map(|x| (floor + scale * x).ln()));
+                            let mean = logs.iter().sum::<f64>() / logs.len().max(1) as f64;
+                            acc.iter_mut()
+                                .zip(&logs)
+                                .zip(f)
+                                .for_each(|((a, l), g)| *a += g * w * (l - mean));
                         }
                     }
                 }

@@ -1294,12 +1294,13 @@ impl Pipeline for AvFusion {
                  oblique view, clutter, a vehicle spanning many angles), so the tuning gives video a \
                  small weight and fusion improves on audio by centimetres, not metres. With two and \
                  three vehicles the runs use each approach's own multi-vehicle settings (lobe \
-                 equalisation of the profiles, own exponents, κ, MCMCDA rates, speed limit and \
-                 largest gap, and the peaks' contrasts as MCMCDA detection scores where the \
-                 tuning search chose them, all tuned by MOTA on the tuning seeds' multi-vehicle \
-                 runs); the broad audio beams still merge and a masked vehicle's peak is often \
-                 missing: audio+video MOTA is {} (sum) and {} (product) over the {} runs, short \
-                 of 0.8 {} (table below). Audio alone has a higher MOTA than audio+video {}.",
+                 equalisation of the profiles, each sensor's evidence faded with its distance, own \
+                 exponents, κ, MCMCDA rates, speed limit and largest gap, and the peaks' contrasts \
+                 as MCMCDA detection scores where the tuning search chose them, all tuned by MOTA \
+                 on the tuning seeds' multi-vehicle runs); the broad audio beams still merge at \
+                 times and hide a vehicle's peak: audio+video MOTA is {} (sum) and {} (product) \
+                 over the {} runs, short of 0.8 {} (table below; held-out seeds in \
+                 docs/av-fusion.md). Audio alone has a higher MOTA than audio+video {}.",
                 fmt_num(out.calibration_error_deg),
                 fmt_num(out.audio_calibration_error_deg),
                 av(2),
