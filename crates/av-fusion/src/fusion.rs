@@ -155,8 +155,8 @@ pub struct RangeFade {
 impl RangeFade {
     /// Checks r₀ and q.
     pub fn check(&self) -> Result<()> {
-        ensure_positive(self.full_weight_m, "full_weight_m")?;
-        ensure_positive(self.power, "power")?;
+        ensure_positive(self.full_weight_m, "range_fade.full_weight_m")?;
+        ensure_positive(self.power, "range_fade.power")?;
         Ok(())
     }
 
@@ -502,7 +502,14 @@ fn fuse_values<'a>(
                             // The logarithms once, into a buffer shared by the sensors.
                             logs.clear();
                             logs.extend(v.iter().map(|x| (floor + scale * x).ln()));
-                            let mean = logs.iter().sum::<f64>() / logs.len().max(1) as f64;
+                            // Over the finite logarithms: under ε = 0 a zero value is −∞,
+                            // which must still veto its cell, not make the mean −∞ (and
+                            // every cell NaN).
+                            let (sum, count) = logs
+                                .iter()
+                                .filter(|l| l.is_finite())
+                                .fold((0.0, 0usize), |(s, n), l| (s + l, n + 1));
+                            let mean = sum / count.max(1) as f64;
                             acc.iter_mut()
                                 .zip(&logs)
                                 .zip(f)

@@ -863,8 +863,9 @@ fn range_fade_factor_and_bad_settings() {
         full_weight_m: 8.0,
         power: 0.5,
     };
-    assert_eq!(f.factor(3.0), 1.0);
-    assert_eq!(f.factor(8.0), 1.0);
+    assert!((f.factor(0.0) - 1.0).abs() < 1e-15);
+    assert!((f.factor(3.0) - 1.0).abs() < 1e-15);
+    assert!((f.factor(8.0) - 1.0).abs() < 1e-15);
     assert!((f.factor(32.0) - 0.5).abs() < 1e-15); // (8/32)^½
     for (r0, q) in [
         (0.0, 1.0),
@@ -880,4 +881,39 @@ fn range_fade_factor_and_bad_settings() {
         });
         assert!(config.check().is_err(), "r₀ {r0}, q {q} accepted");
     }
+}
+
+#[test]
+fn a_fade_keeps_the_plain_products_veto_and_stays_finite() {
+    // ε = 0: a cell where a sensor's profile is exactly 0 has ln t = −∞. The sensor's mean is
+    // taken over its finite logarithms, so the vetoed cells stay 0 and the rest is finite
+    // (a mean of −∞ would turn every cell into NaN).
+    let s1 = SensorNode::audio("a", pose(2.0, 1.0, 0.0), 360);
+    let s2 = SensorNode::audio("b", pose(33.0, 1.5, 0.0), 360);
+    let (t1, t2) = (30.0 * DEG, 150.0 * DEG);
+    let truth = intersection(s1.pose.position, t1, s2.pose.position, t2);
+    let zeroed = |v: Vec<f64>| -> Vec<f64> {
+        v.into_iter()
+            .map(|x| if x > 1e-3 { x } else { 0.0 })
+            .collect()
+    };
+    let mut node = FusionNode::new(vec![s1.clone(), s2.clone()], scheduler()).expect("node");
+    node.receive(report(0, 0.0, zeroed(bump(&s1, t1, 2.0 * DEG))))
+        .expect("ok");
+    node.receive(report(1, 0.0, zeroed(bump(&s2, t2, 2.0 * DEG))))
+        .expect("ok");
+    let mut config = fusion_config(FusionRule::Product { floor: 0.0 });
+    config.range_fade = Some(RangeFade {
+        full_weight_m: 8.0,
+        power: 1.0,
+    });
+    let fused = fuse_snapshot(node.sensors(), &node.snapshot(0), &config).expect("fuses");
+    let values = fused.grid.values();
+    assert!(values.iter().all(|v| v.is_finite()));
+    assert!((values.iter().sum::<f64>() - 1.0).abs() < 1e-9);
+    // Far from both rays every cell is vetoed.
+    let corner = fused.grid.cell_of(&Vec2::new(34.0, 19.0)).expect("inside");
+    assert!(fused.grid.value(corner.0, corner.1) < 1e-300);
+    let best = fused.peaks.first().expect("a peak");
+    assert!((best.position - truth).norm() < 0.5, "{:?}", best.position);
 }
