@@ -623,21 +623,19 @@ pub(super) fn lobes_with(
     (next.power > 0.0).then_some(next)
 }
 
-/// The range fade with r₀ or q replaced (r₀ = 0: off; off takes q = 1 when turned on).
+/// The range fade with r₀ or q replaced. A candidate r₀ ≤ 0 turns it off; a fade turned on
+/// from off takes q = 1, and a q tried while it is off changes nothing.
 pub(super) fn fade_with(
     f: Option<RangeFade>,
     full_weight_m: Option<f64>,
     power: Option<f64>,
 ) -> Option<RangeFade> {
-    let base = f.unwrap_or(RangeFade {
-        full_weight_m: 0.0,
-        power: 1.0,
-    });
-    let next = RangeFade {
-        full_weight_m: full_weight_m.unwrap_or(base.full_weight_m),
-        power: power.unwrap_or(base.power),
-    };
-    (next.full_weight_m > 0.0).then_some(next)
+    let full_weight_m = full_weight_m.unwrap_or(f.map_or(0.0, |f| f.full_weight_m));
+    let power = power.unwrap_or(f.map_or(1.0, |f| f.power));
+    (full_weight_m > 0.0).then_some(RangeFade {
+        full_weight_m,
+        power,
+    })
 }
 
 #[expect(
@@ -865,6 +863,22 @@ mod tests {
         assert_eq!(table.log_ratios.len(), 1);
         assert!(score_table(&[], 3).is_err());
         assert!(score_table(&[(f64::NAN, true)], 3).is_err());
+    }
+
+    #[test]
+    fn fade_coordinates_turn_on_change_and_turn_off() {
+        let on = fade_with(None, Some(8.0), None);
+        assert_eq!(
+            on,
+            Some(RangeFade {
+                full_weight_m: 8.0,
+                power: 1.0
+            })
+        );
+        let half = fade_with(on, None, Some(0.5));
+        assert_eq!(half.map(|f| (f.full_weight_m, f.power)), Some((8.0, 0.5)));
+        assert_eq!(fade_with(half, Some(0.0), None), None);
+        assert_eq!(fade_with(None, None, Some(2.0)), None);
     }
 
     #[test]
