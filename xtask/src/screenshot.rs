@@ -32,9 +32,12 @@ pub fn take(out_dir: &Path, pages: &[String]) -> Result<()> {
     let out_dir = fs::canonicalize(out_dir)?;
     for page in pages {
         let html = fs::read_to_string(out_dir.join(page))?;
-        // A tall enough window for the whole page: the screenshot is of the window.
+        // A tall enough window for the whole page: the screenshot is of the window, and a
+        // short estimate cuts off the last figure (long summaries and wrapped table cells are
+        // not counted), so half as much again; a white margin at the bottom costs nothing.
         let height =
-            400 + 560 * html.matches("<figure>").count() + 26 * html.matches("<tr>").count();
+            (400 + 560 * html.matches("<figure>").count() + 26 * html.matches("<tr>").count()) * 3
+                / 2;
         let png = dir.join(page.replace(".html", ".png"));
         let status = Command::new(browser)
             .args([
