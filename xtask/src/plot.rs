@@ -40,7 +40,7 @@ fn tick(v: f64) -> String {
     text.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
-/// Width of the plotting area and of the legend column to its right, and the height.
+/// Width of the plotting area and of the legend column to its right (at least), and the height.
 const PLOT_W: u32 = 760;
 const LEGEND_W: u32 = 230;
 const HEIGHT: u32 = 520;
@@ -50,7 +50,17 @@ const HEIGHT: u32 = 520;
 pub fn render(chart: &Chart) -> Result<String> {
     let (axes, series) = (&chart.axes, &chart.series);
     let labelled: Vec<&Series> = series.iter().filter(|s| !s.label.is_empty()).collect();
-    let legend_w = if labelled.is_empty() { 0 } else { LEGEND_W };
+    // Wide enough for the longest label (≈ 9 px a character at 16 px, after the 38 px sample).
+    let longest = labelled
+        .iter()
+        .map(|s| s.label.chars().count())
+        .max()
+        .unwrap_or(0);
+    let legend_w = if labelled.is_empty() {
+        0
+    } else {
+        LEGEND_W.max(48 + 9 * u32::try_from(longest).unwrap_or(u32::MAX / 32))
+    };
     let mut svg = String::new();
     {
         let root =
@@ -192,6 +202,25 @@ mod tests {
             1,
             "unlabelled markers get no legend entry"
         );
+    }
+
+    #[test]
+    fn a_long_label_widens_the_legend_column() {
+        let label = "Window B-spline, n by CV per scene"; // 34 characters
+        let chart = Chart::new(
+            "gaps",
+            "x",
+            "y",
+            vec![Series::new(
+                label,
+                vec![(0.0, 0.0), (1.0, 1.0)],
+                Style::Line,
+                0,
+            )],
+        );
+        let svg = render(&chart).unwrap();
+        // 760 + 48 + 9 × 34 = 1114, wider than the 230 px default column.
+        assert!(svg.contains("width=\"1114\""), "column sized to the label");
     }
 
     #[test]
