@@ -59,7 +59,11 @@ pub fn render(chart: &Chart) -> Result<String> {
     let legend_w = if labelled.is_empty() {
         0
     } else {
-        LEGEND_W.max(48 + 9 * u32::try_from(longest).unwrap_or(u32::MAX / 32))
+        let text_w = u32::try_from(longest)
+            .unwrap_or(u32::MAX)
+            .saturating_mul(9)
+            .saturating_add(48);
+        LEGEND_W.max(text_w)
     };
     let mut svg = String::new();
     {

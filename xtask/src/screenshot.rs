@@ -38,6 +38,9 @@ pub fn take(out_dir: &Path, pages: &[String]) -> Result<()> {
         let height =
             (400 + 560 * html.matches("<figure>").count() + 26 * html.matches("<tr>").count()) * 3
                 / 2;
+        if height > 16_000 {
+            eprintln!("note: {page} is cut at 16,000 px (estimated {height} px)");
+        }
         let png = dir.join(page.replace(".html", ".png"));
         let status = Command::new(browser)
             .args([

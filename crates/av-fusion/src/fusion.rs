@@ -142,7 +142,8 @@ impl Default for PeakExtraction {
 /// average cell — under the product g·w·(ln t(c) − mean ln t), t(c) the floored term; under the
 /// sum w·(m + g·(L(c) − m)), m the mean scaled value — so a faded sensor tends to neutral,
 /// not to its best or worst value. Without a fade the subtraction only shifts every cell
-/// alike and is not made.
+/// alike and is not made. Under the plain product (ε = 0) a zero value still vetoes its cell at
+/// any distance: the fade weakens floored terms, it does not lift vetoes.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RangeFade {
@@ -160,7 +161,7 @@ impl RangeFade {
         Ok(())
     }
 
-    /// g(r).
+    /// g(r) of a distance r in metres: 1 within r₀, (r₀ / r)^q beyond.
     pub fn factor(&self, r: f64) -> f64 {
         if r <= self.full_weight_m {
             1.0
@@ -510,10 +511,15 @@ fn fuse_values<'a>(
                                 .filter(|l| l.is_finite())
                                 .fold((0.0, 0usize), |(s, n), l| (s + l, n + 1));
                             let mean = sum / count.max(1) as f64;
-                            acc.iter_mut()
-                                .zip(&logs)
-                                .zip(f)
-                                .for_each(|((a, l), g)| *a += g * w * (l - mean));
+                            acc.iter_mut().zip(&logs).zip(f).for_each(|((a, l), g)| {
+                                // A veto stays a veto even where g underflows to 0
+                                // (0 · −∞ would be NaN).
+                                *a += if *l == f64::NEG_INFINITY {
+                                    *l
+                                } else {
+                                    g * w * (l - mean)
+                                }
+                            });
                         }
                     }
                 }

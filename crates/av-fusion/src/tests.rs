@@ -803,9 +803,12 @@ fn range_fade_weighs_each_sensor_by_distance_by_hand() {
     for (g, w) in got.iter().zip(want) {
         assert!((g - w).abs() < 1e-12, "product {got:?} against {want:?}");
     }
-    // Without the fade b's half weight would make c2 (a's cell) the stronger; with it each
-    // cell is weighed most by its nearer sensor, and c2 still wins, by less.
+    // Unfaded, b's half weight leaves c2 (the cell a supports) the stronger by
+    // (1 / 0.28)^½ ≈ 1.89; faded, each sensor's vote against a cell is the nearer one (g = 1/16
+    // against 1/17), which pulls the two cells together: c2 still wins, by much less.
     assert!(got[1] > got[0]);
+    let unfaded_ratio = (1.0 / (eps + (1.0 - eps) * 0.2)).sqrt();
+    assert!(got[1] / got[0] < 1.1 && unfaded_ratio > 1.8);
     // Weighted sum (max scaling): each sensor adds w (m + g (L − m)), m the mean scaled value.
     let sum_term = |l: [f64; 2], g: [f64; 2], w: f64, i: usize| {
         let m = (l[0] + l[1]) / 2.0;
@@ -916,4 +919,57 @@ fn a_fade_keeps_the_plain_products_veto_and_stays_finite() {
     assert!(fused.grid.value(corner.0, corner.1) < 1e-300);
     let best = fused.peaks.first().expect("a peak");
     assert!((best.position - truth).norm() < 0.5, "{:?}", best.position);
+}
+
+#[test]
+fn a_fade_that_underflows_still_vetoes_and_stays_finite() {
+    // r₀ = 1 m, q = 300: at tens of metres g underflows to 0, and 0 · ln 0 would be NaN.
+    let s1 = SensorNode::audio("a", pose(2.0, 1.0, 0.0), 360);
+    let s2 = SensorNode::audio("b", pose(33.0, 1.5, 0.0), 360);
+    let zeroed = |v: Vec<f64>| -> Vec<f64> {
+        v.into_iter()
+            .map(|x| if x > 1e-3 { x } else { 0.0 })
+            .collect()
+    };
+    let mut node = FusionNode::new(vec![s1.clone(), s2.clone()], scheduler()).expect("node");
+    node.receive(report(0, 0.0, zeroed(bump(&s1, 30.0 * DEG, 2.0 * DEG))))
+        .expect("ok");
+    node.receive(report(1, 0.0, zeroed(bump(&s2, 150.0 * DEG, 2.0 * DEG))))
+        .expect("ok");
+    let mut config = fusion_config(FusionRule::Product { floor: 0.0 });
+    config.range_fade = Some(RangeFade {
+        full_weight_m: 1.0,
+        power: 300.0,
+    });
+    let fused = fuse_snapshot(node.sensors(), &node.snapshot(0), &config).expect("fuses");
+    assert!(fused.grid.values().iter().all(|v| v.is_finite()));
+    let corner = fused.grid.cell_of(&Vec2::new(34.0, 19.0)).expect("inside");
+    assert!(fused.grid.value(corner.0, corner.1) < 1e-300);
+}
+
+#[test]
+fn the_pipeline_fades_as_fuse_snapshot_does() {
+    // AvPipeline builds the fade maps once; fuse_snapshot builds them per call.
+    let sensors = road_sensors();
+    let mut reports = noise_free_reports(&sensors, 1.5).into_iter().peekable();
+    let mut config = av_config(FusionRule::Product { floor: 0.05 });
+    config.fusion.range_fade = Some(RangeFade {
+        full_weight_m: 8.0,
+        power: 0.5,
+    });
+    let mut pipeline = AvPipeline::new(sensors.clone(), &config).expect("pipeline");
+    let mut node = FusionNode::new(sensors.clone(), config.scheduler).expect("node");
+    let mut peaks = 0;
+    for k in 0..15 {
+        let due = config.scheduler.tick_time_s(k) + config.scheduler.staleness_s;
+        while let Some(r) = reports.next_if(|r| r.local_time_s <= due) {
+            pipeline.receive(r.clone()).expect("ok");
+            node.receive(r).expect("ok");
+        }
+        let (scan, _) = pipeline.process(k).expect("processes");
+        let direct = fuse_snapshot(&sensors, &node.snapshot(k), &config.fusion).expect("fuses");
+        assert_eq!(scan.grid.values(), direct.grid.values());
+        peaks += scan.peaks.len();
+    }
+    assert!(peaks >= 10, "{peaks} peaks in 15 ticks");
 }

@@ -1294,8 +1294,8 @@ impl Pipeline for AvFusion {
                  oblique view, clutter, a vehicle spanning many angles), so the tuning gives video a \
                  small weight and fusion improves on audio by centimetres, not metres. With two and \
                  three vehicles the runs use each approach's own multi-vehicle settings (lobe \
-                 equalisation of the profiles, each sensor's evidence faded with its distance, own \
-                 exponents, κ, MCMCDA rates, speed limit and largest gap, and the peaks' contrasts \
+                 equalisation of the profiles, each sensor's evidence faded with its distance \
+                 where the search chose it, own exponents, κ, MCMCDA rates, speed limit and largest gap, and the peaks' contrasts \
                  as MCMCDA detection scores where the tuning search chose them, all tuned by MOTA \
                  on the tuning seeds' multi-vehicle runs); the broad audio beams still merge at \
                  times and hide a vehicle's peak: audio+video MOTA is {} (sum) and {} (product) \

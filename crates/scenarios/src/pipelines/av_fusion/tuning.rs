@@ -727,7 +727,7 @@ pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()
             t.max_gap.iter().map(|&d| f64::from(d)).collect(),
             |s, v| s.max_gap = Some(v as u32),
         ));
-        coords.push(("fade range", t.fade_full_weight_m.clone(), |s, v| {
+        coords.push(("fade r0", t.fade_full_weight_m.clone(), |s, v| {
             s.range_fade = fade_with(s.range_fade, Some(v), None);
         }));
         coords.push(("fade power", t.fade_power.clone(), |s, v| {
