@@ -301,16 +301,15 @@ impl RangeFades {
                 by_sensor: vec![None; sensors.len()],
             });
         };
-        let grid = LikelihoodGrid::zeros(config.region, config.cell_size_m)?;
-        let (cols, rows) = grid.shape();
+        let centres = cell_centres(&LikelihoodGrid::zeros(config.region, config.cell_size_m)?);
         let by_sensor = sensors
             .iter()
             .map(|node| {
                 let at = node.pose.position;
-                let cells = (0..rows).flat_map(|r| (0..cols).map(move |c| (c, r)));
                 Some(
-                    cells
-                        .map(|(c, r)| fade.factor((grid.cell_centre(c, r) - at).norm()))
+                    centres
+                        .iter()
+                        .map(|c| fade.factor((c - at).norm()))
                         .collect(),
                 )
             })
@@ -387,11 +386,9 @@ fn explain_away(
         return Ok(Vec::new());
     };
     let top = fused.values().iter().copied().fold(0.0, f64::max);
-    let (cols, rows) = fused.shape();
-    let centres: Vec<Vec2> = (0..rows)
-        .flat_map(|r| (0..cols).map(move |c| (c, r)))
-        .map(|(c, r)| fused.cell_centre(c, r))
-        .collect();
+    let centres = cell_centres(fused);
+    // One residual grid, refilled after every notch.
+    let mut grid = LikelihoodGrid::zeros(config.region, config.cell_size_m)?;
     let mut residual: Vec<Vec<f64>> = grids.iter().map(|(_, _, g)| g.values().to_vec()).collect();
     let sigma = pc.explain_away_deg.to_radians();
     let mut kept = vec![first];
@@ -413,7 +410,7 @@ fn explain_away(
                 }
             });
         let Some(acc) = fuse_values(
-            cols * rows,
+            centres.len(),
             residual
                 .iter()
                 .zip(grids)
@@ -423,7 +420,6 @@ fn explain_away(
         else {
             break;
         };
-        let mut grid = LikelihoodGrid::zeros(config.region, config.cell_size_m)?;
         fill(&mut grid, Some(acc))?;
         let r2 = pc.suppression_radius_m * pc.suppression_radius_m;
         let next = extract_peaks(
@@ -565,6 +561,15 @@ pub fn fuse_grids<'a>(
     let fused = fuse_values(cols * rows, checked, rule)?;
     fill(&mut out, fused)?;
     Ok(out)
+}
+
+/// The centres of `grid`'s cells, row-major (the order of its values).
+fn cell_centres(grid: &LikelihoodGrid) -> Vec<Vec2> {
+    let (cols, rows) = grid.shape();
+    (0..rows)
+        .flat_map(|r| (0..cols).map(move |c| (c, r)))
+        .map(|(c, r)| grid.cell_centre(c, r))
+        .collect()
 }
 
 /// Sets `grid`'s cells (row-major) to `values`; `None` leaves it as it is.

@@ -31,6 +31,20 @@ fn source_at(bearing_rad: f64, range_m: f64, signal: SourceSignal) -> Source {
     }
 }
 
+/// Two white-noise sources 20 m away at bearings `a` and `b` (radians), recorded for
+/// `duration_s` in a diffuse field of 16 directions at `snr_db`.
+fn two_noise_sources(a: f64, b: f64, snr_db: f64, duration_s: f64, seed: u64) -> Recording {
+    let sources = [
+        source_at(a, 20.0, SourceSignal::WhiteNoise),
+        source_at(b, 20.0, SourceSignal::WhiteNoise),
+    ];
+    let noise = BackgroundNoise {
+        snr_db,
+        field: NoiseField::Diffuse { n_directions: 16 },
+    };
+    record(&sources, duration_s, Some(noise), seed)
+}
+
 fn record(
     sources: &[Source],
     duration_s: f64,
@@ -378,16 +392,8 @@ fn background_noise_has_the_requested_snr() {
 #[test]
 fn two_sources_sixty_degrees_apart_give_two_peaks_at_20_db() {
     let (a, b) = (30f64.to_radians(), 90f64.to_radians());
-    let sources = [
-        source_at(a, 20.0, SourceSignal::WhiteNoise),
-        source_at(b, 20.0, SourceSignal::WhiteNoise),
-    ];
-    let noise = BackgroundNoise {
-        snr_db: 20.0,
-        field: NoiseField::Diffuse { n_directions: 16 },
-    };
     for seed in 0..3 {
-        let rec = record(&sources, 0.25, Some(noise), 40 + seed);
+        let rec = two_noise_sources(a, b, 20.0, 0.25, 40 + seed);
         for (method, weighting) in [
             (Method::TimeDomain, Weighting::Plain),
             (Method::FrequencyDomain, Weighting::Plain),
@@ -887,16 +893,8 @@ fn mvdr_remembers_earlier_frames_by_its_forgetting_factor_and_reset_forgets_them
 #[test]
 fn mvdr_resolves_two_sources_that_delay_and_sum_merges() {
     let (a, b) = (40f64.to_radians(), 65f64.to_radians());
-    let sources = [
-        source_at(a, 20.0, SourceSignal::WhiteNoise),
-        source_at(b, 20.0, SourceSignal::WhiteNoise),
-    ];
-    let noise = BackgroundNoise {
-        snr_db: 30.0,
-        field: NoiseField::Diffuse { n_directions: 16 },
-    };
     for seed in 0..3 {
-        let rec = record(&sources, 0.5, Some(noise), 70 + seed);
+        let rec = two_noise_sources(a, b, 30.0, 0.5, 70 + seed);
         // Peaks within 30° of the sources' midpoint (the small array's side lobes lie
         // elsewhere).
         let near = |bf: &Beamform| -> Vec<f64> {

@@ -1295,9 +1295,10 @@ impl Pipeline for AvFusion {
                  small weight and fusion improves on audio by centimetres, not metres. With two and \
                  three vehicles the runs use each approach's own multi-vehicle settings (lobe \
                  equalisation of the profiles, each sensor's evidence faded with its distance \
-                 where the search chose it, own exponents, κ, MCMCDA rates, speed limit and largest gap, and the peaks' contrasts \
-                 as MCMCDA detection scores where the tuning search chose them, all tuned by MOTA \
-                 on the tuning seeds' multi-vehicle runs); the broad audio beams still merge at \
+                 where the search chose it, own exponents, κ, MCMCDA rates, speed limit and \
+                 largest gap, and the peaks' contrasts as MCMCDA detection scores where the \
+                 tuning search chose them, all tuned by MOTA on the tuning seeds' multi-vehicle \
+                 runs); the broad audio beams still merge at \
                  times and hide a vehicle's peak: audio+video MOTA is {} (sum) and {} (product) \
                  over the {} runs, short of 0.8 {} (table below; held-out seeds in \
                  docs/av-fusion.md). Audio alone has a higher MOTA than audio+video {}.",
