@@ -1,5 +1,5 @@
 # Stone Soup's GNN and JPDA on the realistic pedestrian sequences of the `mot-realistic` scenario
-# (crates/scenarios/src/walkers.rs), tuned on the tuning sequences only, scored with `cargo xtask
+# (crates/mot/src/walkers.rs), tuned on the tuning sequences only, scored with `cargo xtask
 # eval`. The numbers it prints are the peer rows of fixtures/scenarios/mot-realistic.toml and
 # docs/mot-realistic.md.
 #

@@ -5,19 +5,19 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use eval_metrics::{EvalConfig, EvalReport, MatchConfig, evaluate};
-use scenarios::mot::{EvaluationPair, load_evaluation_pair};
+use mot::text::{EvaluationPair, load_evaluation_pair};
 use scenarios::{Table, fmt_num};
 
 use crate::report::to_markdown;
 use crate::{Outcome, read_file};
 
-/// Reads ground truth and tracker output (see `scenarios::mot` for the conventions: empty
+/// Reads ground truth and tracker output (see `mot::text` for the conventions: empty
 /// ground truth is an error, empty predictions and skipped headers come with notes).
 fn load_with_notes(gt: &Path, pred: &Path) -> Result<EvaluationPair> {
-    load_evaluation_pair(
+    Ok(load_evaluation_pair(
         (&read_file(gt)?, &gt.display().to_string()),
         (&read_file(pred)?, &pred.display().to_string()),
-    )
+    )?)
 }
 
 /// [`load_with_notes`] without the notes.

@@ -22,7 +22,7 @@ pub fn fuzz_mot(data: &[u8]) {
     let _ = tracker_model::TrackSet::from_mot_rows(&file.rows);
     // The command-line conventions on top (headers, empty files).
     let text = String::from_utf8_lossy(data);
-    let _ = scenarios::mot::load_evaluation_pair((&text, "gt"), (&text, "pred"));
+    let _ = mot::text::load_evaluation_pair((&text, "gt"), (&text, "pred"));
 }
 
 /// Fuzz entry: a scenario file (parsing and checks only; no pipeline runs).
@@ -35,7 +35,7 @@ pub fn fuzz_scenario_toml(data: &[u8]) {
 /// Fuzz entry: a `cargo xtask track` configuration. One that resolves prints as TOML that
 /// loads back to the same configuration.
 pub fn fuzz_track_config(data: &[u8]) {
-    use scenarios::track::{TrackConfig, render_config};
+    use mot::track::{TrackConfig, render_config};
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
@@ -129,7 +129,7 @@ pub fn fuzz_eval(data: &[u8]) {
         None => (data, data),
     };
     let (gt, pred) = (String::from_utf8_lossy(gt), String::from_utf8_lossy(pred));
-    let Ok(pair) = scenarios::mot::load_evaluation_pair((&gt, "gt"), (&pred, "pred")) else {
+    let Ok(pair) = mot::text::load_evaluation_pair((&gt, "gt"), (&pred, "pred")) else {
         return;
     };
     let config = EvalConfig {
@@ -180,13 +180,12 @@ const FUZZ_TRACK_CAPS: [(&str, &str, i64); 11] = [
 /// typed error or tracks whose points are finite boxes of positive size, at frames within the
 /// input's first and last frame widened by `[boxes] extrapolate_frames`.
 pub fn fuzz_track(data: &[u8]) {
-    use scenarios::track::{TrackConfig, Tracker, empty_output_warning, track_detections};
+    use mot::track::{TrackConfig, TrackerKind, empty_output_warning, track_detections};
     let (dets, config) = match data.iter().position(|&b| b == 0) {
         Some(i) => (&data[..i], Some(&data[i + 1..])),
         None => (data, None),
     };
-    let Ok((mut rows, _notes)) =
-        scenarios::mot::read_detections(&String::from_utf8_lossy(dets), "dets")
+    let Ok((mut rows, _notes)) = mot::text::read_detections(&String::from_utf8_lossy(dets), "dets")
     else {
         return;
     };
@@ -223,7 +222,7 @@ pub fn fuzz_track(data: &[u8]) {
     let first = rows.iter().map(|r| r.frame).min().unwrap_or(0);
     let last = rows.iter().map(|r| r.frame).max().unwrap_or(0);
     let span = first.saturating_sub(extra)..=last.saturating_add(extra);
-    for tracker in Tracker::ALL {
+    for tracker in TrackerKind::ALL {
         let Ok(set) = track_detections(tracker, &rows, &settings, 1) else {
             continue;
         };

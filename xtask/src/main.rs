@@ -87,7 +87,7 @@ enum Command {
         /// detections); gnn-online: GNN output frame by frame, coasting through misses; phd:
         /// SMC-PHD on the boxes themselves.
         #[arg(long, required_unless_present = "print_config")]
-        tracker: Option<scenarios::track::Tracker>,
+        tracker: Option<mot::track::TrackerKind>,
         /// Detections (frame,id,left,top,width,height,conf,...).
         #[arg(long, required_unless_present = "print_config")]
         input: Option<PathBuf>,
@@ -119,7 +119,7 @@ enum Command {
         #[arg(long)]
         frames: Option<PathBuf>,
     },
-    /// Write a realistic pedestrian sequence (scenarios::walkers): OUT-det.txt (detections
+    /// Write a realistic pedestrian sequence (mot::walkers): OUT-det.txt (detections
     /// with scores) and OUT-gt.txt (ground truth), MOTChallenge text.
     Walkers {
         /// Seed of the generator.
@@ -192,11 +192,11 @@ fn main() -> ExitCode {
             frames,
         } => track::run(&track::Request {
             tracker: match (tracker, online) {
-                (Some(scenarios::track::Tracker::Mcmcda), true) => {
-                    Some(scenarios::track::Tracker::McmcdaOnline)
+                (Some(mot::track::TrackerKind::Mcmcda), true) => {
+                    Some(mot::track::TrackerKind::McmcdaOnline)
                 }
-                (Some(scenarios::track::Tracker::Gnn), true) => {
-                    Some(scenarios::track::Tracker::GnnOnline)
+                (Some(mot::track::TrackerKind::Gnn), true) => {
+                    Some(mot::track::TrackerKind::GnnOnline)
                 }
                 (t, _) => t,
             },

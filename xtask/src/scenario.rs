@@ -133,7 +133,10 @@ pub fn run_all(scenarios: Vec<Scenario>) -> Vec<RunResult> {
                 &file.pipeline,
                 &file.params,
                 file.seed,
-                &Env::new(&bar, &WorkspaceFiles, &WallClock(start)),
+                &Env {
+                    developer: &Terminal,
+                    ..Env::new(&bar, &WorkspaceFiles, &WallClock(start))
+                },
             )
             .with_context(|| format!("scenario {}", scenario.name));
             bar.0.finish_and_clear();
@@ -326,4 +329,21 @@ pub fn run_suite(
     };
     println!("{} {verdict}", plural(n, "scenario", "scenarios"));
     Ok(ok)
+}
+
+/// Developer options from the environment variables of their names; their text to stderr.
+struct Terminal;
+
+impl scenarios::Developer for Terminal {
+    fn option(&self, name: &str) -> Option<String> {
+        std::env::var(name).ok()
+    }
+
+    #[expect(
+        clippy::print_stderr,
+        reason = "developer tools (tuning searches) report to the terminal as they measure"
+    )]
+    fn say(&self, text: &str) {
+        eprintln!("{text}");
+    }
 }

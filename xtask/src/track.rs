@@ -6,9 +6,9 @@ use std::fs;
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use scenarios::mot::read_detections;
-use scenarios::track::{
-    TrackConfig, Tracker, empty_output_warning, render_config, track_detections_with_frames,
+use mot::text::read_detections;
+use mot::track::{
+    TrackConfig, TrackerKind, empty_output_warning, render_config, track_detections_with_frames,
 };
 use tracker_model::{MotRow, format_mot};
 
@@ -37,7 +37,7 @@ fn read_input(input: &Path) -> Result<Vec<MotRow>> {
 /// What `cargo xtask track` was asked.
 pub struct Request<'a> {
     /// The tracker (needed unless printing the configuration).
-    pub tracker: Option<Tracker>,
+    pub tracker: Option<TrackerKind>,
     /// Detections.
     pub input: Option<&'a Path>,
     /// Where the tracks go.
@@ -111,7 +111,7 @@ pub fn run(req: &Request<'_>) -> Outcome {
 }
 
 /// The fitted parameters the tracker used, on one line.
-fn fitted_summary(tracker: Tracker, c: &scenarios::track::EffectiveConfig) -> String {
+fn fitted_summary(tracker: TrackerKind, c: &mot::track::EffectiveConfig) -> String {
     let m = &c.model;
     let q = match m.motion.noise() {
         tracker_model::CvNoise::Discrete {
@@ -120,7 +120,7 @@ fn fitted_summary(tracker: Tracker, c: &scenarios::track::EffectiveConfig) -> St
         tracker_model::CvNoise::WhiteAcceleration { q } => q,
     };
     match tracker {
-        Tracker::Phd => format!(
+        TrackerKind::Phd => format!(
             "p_d {:.3}, clutter {:.3}/frame, births {:.4}/frame",
             c.phd.p_detect, c.phd.clutter_rate, c.phd.birth_rate
         ),
@@ -145,7 +145,7 @@ fn fitted_summary(tracker: Tracker, c: &scenarios::track::EffectiveConfig) -> St
 }
 
 /// GNN's detections dropped below `[scores] gnn_min_log_ratio`, if any.
-fn dropped(c: &scenarios::track::EffectiveConfig) -> String {
+fn dropped(c: &mot::track::EffectiveConfig) -> String {
     if c.gnn_dropped == 0 {
         return String::new();
     }
@@ -158,7 +158,7 @@ fn dropped(c: &scenarios::track::EffectiveConfig) -> String {
 /// `cargo xtask walkers`: writes `OUT-det.txt` and `OUT-gt.txt`.
 #[expect(clippy::print_stdout, reason = "what was written goes to the terminal")]
 pub fn write_walkers(seed: u64, fps: f64, seconds: f64, out: &Path) -> Outcome {
-    let config = scenarios::walkers::WalkersConfig {
+    let config = mot::walkers::WalkersConfig {
         fps,
         duration_s: seconds,
         ..Default::default()

@@ -1,6 +1,6 @@
 //! The fusion node's side of the network: one circular buffer of time-stamped reports per
 //! sensor, and the periodic scheduler that takes from every buffer the report nearest in time
-//! to each fusion time stamp (Kushwaha et al. 2008; our algorithms.md §5.4).
+//! to each fusion time stamp (Kushwaha et al. 2008, §4).
 
 use std::collections::VecDeque;
 

@@ -1,4 +1,4 @@
-//! Grid likelihoods and their fusion (our algorithms.md §5.4): each selected sensor's profile
+//! Grid likelihoods and their fusion (Kushwaha et al. 2008, §4): each selected sensor's profile
 //! is projected onto the grid with tracker-model's [`BearingProfile::project`]
 //! (L_s(c) = D_s(θ_{s,c})), the grids are fused by a weighted sum or a floored product, and the
 //! fused grid's peaks, with covariances from their shape, are the tracker's measurements.

@@ -1,11 +1,12 @@
 //! # av-fusion
 //!
 //! Audio-video fusion tracked by MCMCDA: the multi-sensor system of Kushwaha, Oh, Amundson,
-//! Koutsoukos & Ledeczi (MFI 2008), as reviewed by Oh (seed 000 §V). Audio nodes report
+//! Koutsoukos & Ledeczi (MFI 2008), as reviewed by Oh (2012, "Data Association and Its Applications to Intelligent
+//! Systems: A Review", §V). Audio nodes report
 //! beamforms (energy over 36 beams) and video nodes detection functions (foreground pixels
 //! over 160 angles); a fusion node buffers them, fuses them on a grid at a fixed rate and
-//! tracks the grid's peaks with online MCMCDA. Our reconstruction is algorithms.md §5.4;
-//! choices and numbers in `docs/av-fusion.md`.
+//! tracks the grid's peaks with online MCMCDA (Kushwaha et al. 2008, §§3-4); choices and
+//! numbers in `docs/av-fusion.md`.
 //!
 //! * [`SensorNode`] (kind, believed pose, profile layout, clock offset, weight, profile
 //!   exponent, optional [`LobeEqualisation`] that lifts a profile's weaker lobes) and

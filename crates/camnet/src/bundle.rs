@@ -1,5 +1,5 @@
-//! Joint refinement of the network (a small bundle adjustment, algorithms.md §6, optional in
-//! the issue): Levenberg-Marquardt on the reprojection error of every observation over all
+//! Joint refinement of the network (a small bundle adjustment, Triggs et al. 2000, an
+//! optional step beyond Meingast et al. 2007): Levenberg-Marquardt on the reprojection error of every observation over all
 //! camera poses and all triangulated track points, the points eliminated by the Schur
 //! complement (each point's 3 × 3 block is independent; the reduced camera system is dense
 //! 6(m−1) × 6(m−1) for m cameras, small for a camera network).

@@ -358,7 +358,7 @@ pub fn match_tracks<R: Rng + ?Sized>(
 
 /// Guided track correspondence: the relative pose of the two cameras is already known
 /// approximately (`essential_guess`, e.g. composed through the network,
-/// E = \[t\]× R of `pose_b ∘ pose_a⁻¹`, algorithms.md §6), so no seed search is needed.
+/// E = \[t\]× R of `pose_b ∘ pose_a⁻¹`, Hartley & Zisserman 2004, §9.6), so no seed search is needed.
 /// Every candidate (all of them, not only the `max_candidates` longest) that keeps
 /// `accept_fraction` of its points within the Sampson threshold of the guess joins, best
 /// first and compatible with those already in (one-to-one, except that time-disjoint

@@ -1,7 +1,7 @@
 //! # camnet
 //!
-//! Camera-network localisation from object image tracks (Meingast, Oh & Sastry, ICCV 2007;
-//! reconstruction in `algorithms.md` §6, choices in `docs/camnet.md`). Each camera tracks
+//! Camera-network localisation from object image tracks (Meingast, Oh & Sastry, ICCV 2007,
+//! §§3-4; choices in `docs/camnet.md`). Each camera tracks
 //! moving objects in its own image with MCMCDA; the image tracks are the features matched
 //! between cameras; the matched, time-aligned points give each pair's relative pose; a
 //! spanning tree of the view graph and scales from points seen by three cameras put every

@@ -1114,7 +1114,7 @@ fn noise_is_estimated_by_maximum_likelihood() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Frame numbers at the ends of u32 (issue 12 §6)
+// Frame numbers at the ends of u32
 
 #[test]
 fn frames_near_u32_max_are_typed_errors_or_correct_results() {

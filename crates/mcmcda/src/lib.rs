@@ -76,6 +76,7 @@ pub mod reference;
 mod sampler;
 mod single_scan;
 mod track_filter;
+mod trackers;
 
 #[cfg(test)]
 mod tests;
@@ -93,3 +94,4 @@ pub use partition::Partition;
 pub use problem::{MeasId, Problem};
 pub use sampler::{Chain, McmcdaRun, MoveStats, run_chains};
 pub use single_scan::{JpdaResult, SingleScanConfig, jpda_exact, single_scan_mcmcda};
+pub use trackers::{BatchMcmcda, Gnn, JpdaAssociation, JpdaTracker};

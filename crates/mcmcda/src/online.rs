@@ -505,24 +505,32 @@ impl OnlineTracker {
     /// measurements only, and a label that already handed over pieces keeps even a single
     /// remaining measurement in `associations` (its smoothed track then has one point).
     pub fn finish(mut self) -> Result<OnlineResult> {
+        self.finish_in_place()
+    }
+
+    /// [`Self::finish`] on a borrowed tracker, which is left without measurements (its
+    /// problem empty, nothing committed): stepping it again starts a new run with the old
+    /// labels retired.
+    pub(crate) fn finish_in_place(&mut self) -> Result<OnlineResult> {
         if let Ok(all) = self.problem.all_scans()
             && self.open_from <= *all.end()
         {
             self.commit(self.open_from..=*all.end());
         }
+        let first = self.problem.first_frame();
+        let problem = std::mem::replace(&mut self.problem, Problem::empty(&self.model, first));
+        let committed = std::mem::take(&mut self.committed);
+        let released = std::mem::take(&mut self.released);
+        self.map.clear();
+        self.open_from = 0;
         let mut tracks = TrackSet::new();
         let mut associations = Vec::new();
-        for (label, meas) in self.committed {
-            let released = self.released.get(&label).copied().unwrap_or(0);
+        for (label, meas) in committed {
+            let released = released.get(&label).copied().unwrap_or(0);
             if meas.is_empty() || released + meas.len() < 2 {
                 continue;
             }
-            let one = smoothed_tracks(
-                &self.model,
-                &self.problem,
-                std::slice::from_ref(&meas),
-                label,
-            )?;
+            let one = smoothed_tracks(&self.model, &problem, std::slice::from_ref(&meas), label)?;
             for t in one.tracks() {
                 tracks.push(t.clone())?;
             }
@@ -531,7 +539,7 @@ impl OnlineTracker {
         Ok(OnlineResult {
             tracks,
             associations,
-            problem: self.problem,
+            problem,
         })
     }
 }

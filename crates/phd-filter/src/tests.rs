@@ -701,7 +701,7 @@ mod simulated_detectors {
     }
 }
 
-/// Jumping a gap of empty frames in one prediction (issue 20: sparse time).
+/// Jumping a gap of empty frames in one prediction (sparse time).
 mod gaps {
     use nalgebra::SMatrix;
     use rand::SeedableRng;

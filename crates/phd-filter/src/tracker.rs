@@ -5,10 +5,11 @@
 use std::collections::BTreeMap;
 
 use tracker_model::{
-    BoundingBox, Frame, LocalDetectorFactory, Track, TrackId, TrackPoint, TrackSet,
+    BoundingBox, Detection, Frame, LocalDetectorFactory, Track, TrackId, TrackPoint, TrackSet,
+    TrackState,
 };
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::fusion::{DetectorBank, FusionConfig, fuse};
 use crate::smc::{Estimate, PhdStep};
 
@@ -64,6 +65,8 @@ pub struct PhdTracker<F, D = NoLocalDetectors> {
     fusion: FusionConfig,
     bank: DetectorBank,
     tracks: BTreeMap<u64, Vec<TrackPoint>>,
+    /// The last frame stepped, for [`tracker_model::Tracker::step`]'s gaps.
+    last_frame: Option<Frame>,
 }
 
 impl<F: PhdFilter> PhdTracker<F> {
@@ -75,6 +78,7 @@ impl<F: PhdFilter> PhdTracker<F> {
             fusion: FusionConfig::default(),
             bank: DetectorBank::default(),
             tracks: BTreeMap::new(),
+            last_frame: None,
         }
     }
 }
@@ -90,6 +94,7 @@ impl<F: PhdFilter, D: LocalDetectorFactory> PhdTracker<F, D> {
             fusion,
             bank: DetectorBank::default(),
             tracks: BTreeMap::new(),
+            last_frame: None,
         })
     }
 
@@ -139,6 +144,7 @@ impl<F: PhdFilter, D: LocalDetectorFactory> PhdTracker<F, D> {
             }
             self.bank.update_confidence(&found, global, &self.fusion);
         }
+        self.last_frame = Some(frame);
         for e in &step.estimates {
             self.tracks
                 .entry(e.label)
@@ -163,6 +169,52 @@ impl<F: PhdFilter, D: LocalDetectorFactory> PhdTracker<F, D> {
             .map(|(l, points)| Track::from_points(TrackId(*l), points.clone()))
             .collect::<tracker_model::Result<Vec<_>>>()?;
         Ok(TrackSet::from_tracks(tracks)?)
+    }
+}
+
+impl<F: PhdFilter, D: LocalDetectorFactory> tracker_model::Tracker for PhdTracker<F, D> {
+    type Error = Error;
+
+    /// [`PhdTracker::step_after`] over the frames since the last step (one for the first), on
+    /// the detections' boxes; the states are the frame's estimates, labels as ids. A point
+    /// detection is an error: the filter's state is a box.
+    fn step(&mut self, frame: Frame, detections: &[Detection]) -> Result<Vec<TrackState>> {
+        let frames = match self.last_frame {
+            None => 1,
+            Some(last) if frame > last => u64::from(frame - last),
+            Some(last) => {
+                return Err(Error::InvalidParameter {
+                    name: "frame",
+                    reason: format!("{frame} is not after the last frame stepped, {last}"),
+                });
+            }
+        };
+        let boxes = detections
+            .iter()
+            .map(|d| {
+                d.bbox().ok_or_else(|| Error::InvalidParameter {
+                    name: "detection",
+                    reason: format!(
+                        "detection {} is a point; the PHD filter tracks boxes",
+                        d.id.0
+                    ),
+                })
+            })
+            .collect::<Result<Vec<BoundingBox>>>()?;
+        let output = self.step_after(frames, frame, &boxes)?;
+        Ok(output
+            .estimates
+            .iter()
+            .map(|e| TrackState {
+                id: TrackId(e.label),
+                point: TrackPoint::boxed(frame, e.bbox),
+            })
+            .collect())
+    }
+
+    /// Every track reported ([`PhdTracker::tracks`]).
+    fn finish(&mut self) -> Result<TrackSet> {
+        self.tracks()
     }
 }
 

@@ -17,8 +17,8 @@
 //! report. Like xtask, and unlike the
 //! library crates, it reports errors with `anyhow`: a pipeline's error is read by a person.
 //!
-//! [`track`] holds the detection-file trackers that `cargo xtask track` and the `mot-track`
-//! pipeline share, [`mot`] the MOTChallenge text conventions of `cargo xtask eval`.
+//! The detection-file trackers that `cargo xtask track` and the MOT pipelines share, and the
+//! MOTChallenge text conventions of `cargo xtask eval`, are the library crate `mot`.
 //!
 //! ```
 //! use scenarios::{Env, NoClock, NoInputs, NoProgress, run_pipeline};
@@ -52,13 +52,9 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::de::DeserializeOwned;
 
-pub mod mot;
 mod pipelines;
 mod report;
 mod stats;
-pub mod track;
-pub mod track_frames;
-pub mod walkers;
 
 pub use report::{Axes, BAR_WIDTH, Chart, Figure, Section, Series, Style, Table, YAxis, fmt_num};
 
@@ -115,6 +111,28 @@ impl Clock for NoClock {
     }
 }
 
+/// The developer tools a pipeline may run besides its experiment (tuning searches,
+/// diagnostics): which ones the caller asked for, and where their text goes. `cargo xtask
+/// scenarios` reads each option from the environment variable of the same name and writes the
+/// text to the terminal; the crate itself touches neither.
+pub trait Developer: Sync {
+    /// The value of the developer option `name` (e.g. `AV_FUSION_TUNE`), if it is set.
+    fn option(&self, name: &str) -> Option<String>;
+    /// One line (or table) of a developer tool's output, shown as it is measured.
+    fn say(&self, text: &str);
+}
+
+/// No developer tools: no option is set and nothing is said (tests, library use, the suite).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NoDeveloper;
+
+impl Developer for NoDeveloper {
+    fn option(&self, _: &str) -> Option<String> {
+        None
+    }
+    fn say(&self, _: &str) {}
+}
+
 /// What a pipeline may use besides its parameters and generator.
 #[derive(Clone, Copy)]
 pub struct Env<'a> {
@@ -124,6 +142,8 @@ pub struct Env<'a> {
     pub inputs: &'a dyn Inputs,
     /// Wall-clock time, for reported timings.
     pub clock: &'a dyn Clock,
+    /// Developer options and their output.
+    pub developer: &'a dyn Developer,
     /// The scenario's seed, for library calls that take a seed rather than a generator.
     pub seed: u64,
 }
@@ -135,6 +155,7 @@ impl<'a> Env<'a> {
             progress,
             inputs,
             clock,
+            developer: &NoDeveloper,
             seed: 0,
         }
     }

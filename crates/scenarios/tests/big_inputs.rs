@@ -1,4 +1,4 @@
-//! Resources on big inputs (issue 20): `eval` and `track` on 10⁶-row files generated here (the
+//! Resources on big inputs: `eval` and `track` on 10⁶-row files generated here (the
 //! MCMCDA and PHD trackers on fewer rows: see their tests). Peak heap is
 //! measured by a counting global allocator (`peak_alloc`), which is why this is a test binary of
 //! its own. Memory must follow the number of rows, not the span of frame numbers: the same rows
@@ -7,9 +7,9 @@
 use std::time::Instant;
 
 use eval_metrics::{EvalConfig, evaluate};
+use mot::text::{load_evaluation_pair, read_detections};
+use mot::track::{TrackConfig, TrackerKind, track_detections};
 use peak_alloc::PeakAlloc;
-use scenarios::mot::{load_evaluation_pair, read_detections};
-use scenarios::track::{TrackConfig, Tracker, track_detections};
 
 #[global_allocator]
 static HEAP: PeakAlloc = PeakAlloc;
@@ -114,7 +114,7 @@ fn detections(n_objects: u64, n_frames: u64, spread: bool) -> String {
 
 /// Peak heap (bytes) above the detection text, seconds, and output points of reading the file
 /// and tracking it.
-fn measure_track(tracker: Tracker, text: &str) -> (usize, f64, usize) {
+fn measure_track(tracker: TrackerKind, text: &str) -> (usize, f64, usize) {
     HEAP.reset_peak_usage();
     let base = HEAP.current_usage();
     let start = Instant::now();
@@ -132,7 +132,7 @@ fn measure_track(tracker: Tracker, text: &str) -> (usize, f64, usize) {
     clippy::print_stderr,
     reason = "the measurements are the test's record"
 )]
-fn track_by_rows_not_by_frame_span(tracker: Tracker, n_objects: u64, n_frames: u64) {
+fn track_by_rows_not_by_frame_span(tracker: TrackerKind, n_objects: u64, n_frames: u64) {
     let rows = (n_objects * n_frames) as f64;
     let text = detections(n_objects, n_frames, false);
     let (dense_peak, dense_s, dense_points) = measure_track(tracker, &text);
@@ -172,12 +172,12 @@ fn track_by_rows_not_by_frame_span(tracker: Tracker, n_objects: u64, n_frames: u
 #[test]
 fn track_on_a_million_rows_costs_memory_by_rows_not_by_frame_span() {
     let _serial = one_at_a_time();
-    track_by_rows_not_by_frame_span(Tracker::Gnn, 10, 100_000);
+    track_by_rows_not_by_frame_span(TrackerKind::Gnn, 10, 100_000);
 }
 
 #[test]
 fn track_phd_and_mcmcda_cost_memory_by_rows_not_by_frame_span() {
     let _serial = one_at_a_time();
-    track_by_rows_not_by_frame_span(Tracker::Phd, 10, 10_000);
-    track_by_rows_not_by_frame_span(Tracker::Mcmcda, 10, 200);
+    track_by_rows_not_by_frame_span(TrackerKind::Phd, 10, 10_000);
+    track_by_rows_not_by_frame_span(TrackerKind::Mcmcda, 10, 200);
 }

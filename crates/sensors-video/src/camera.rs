@@ -1,5 +1,5 @@
 //! A pinhole camera on a mast and the angle profile: the number of foreground pixels in each of
-//! N bearings (the paper's detection function over 160 angles; our algorithms.md §5.3).
+//! N bearings (Kushwaha et al. 2008's detection function over 160 angles).
 //!
 //! Conventions: world x, y horizontal, z up, bearings counter-clockwise from +x. The camera at
 //! `position` looks along `heading_rad`, pitched down by `tilt_rad`, no roll. Pixel (u, v) has

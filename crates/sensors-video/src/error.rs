@@ -86,10 +86,43 @@ pub enum Error {
         reason: String,
     },
     /// An image sequence folder with no readable frames.
-    #[error("no PNG/PGM/PPM frames in {path}")]
+    #[error("frame folder {} holds no .png, .pgm, .ppm or .jpg image", path.display())]
     EmptySequence {
         /// The folder.
         path: PathBuf,
+    },
+    /// An image of a frame folder whose file name has no digits to take the frame number from,
+    /// or a number too large for a frame.
+    #[error("image {path} has no frame number (digits) in its file name")]
+    NoFrameNumber {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Two images of a frame folder with the same frame number (`1.png` and `001.png`).
+    #[error("images {} and {} both have frame number {frame}", paths[0].display(), paths[1].display())]
+    DuplicateFrame {
+        /// The frame number.
+        frame: u32,
+        /// The two files.
+        paths: [PathBuf; 2],
+    },
+    /// An image of a frame folder whose size differs from the first image's.
+    #[error("image {} is {} x {}, but the folder's first image is {} x {}", path.display(), size.0, size.1, expected.0, expected.1)]
+    SizeMismatch {
+        /// The image.
+        path: PathBuf,
+        /// Its size (width, height).
+        size: (u32, u32),
+        /// The first image's size.
+        expected: (u32, u32),
+    },
+    /// A frame asked of a folder that has no image of it.
+    #[error("frame folder {} has no image of frame {frame}", dir.display())]
+    NoSuchFrame {
+        /// The frame.
+        frame: u32,
+        /// The folder.
+        dir: PathBuf,
     },
     /// An I/O failure.
     #[error("I/O error on {path}: {source}")]

@@ -8,6 +8,7 @@
 //! stream as RGB; 10- and 12-bit streams are an [`Error::UnsupportedPixelFormat`].
 
 use std::cell::Cell;
+use std::collections::BTreeMap;
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::rc::Rc;
@@ -85,35 +86,184 @@ pub fn write_image(frame: &VideoFrame, path: &Path) -> Result<()> {
     .map_err(|e| image_err(path, &e))
 }
 
-/// Reads every `.png`, `.pgm` and `.ppm` file of a folder in file-name order. All frames must
-/// share the first one's size and format ([`Error::FrameChanged`] otherwise).
+/// Reads every image of a folder ([`FrameFolder`]) in frame-number order. All frames must
+/// share the first one's size and format ([`Error::SizeMismatch`], [`Error::FrameChanged`]).
 pub fn read_image_sequence(dir: &Path) -> Result<Vec<VideoFrame>> {
-    let io = |source| Error::Io {
-        path: dir.to_path_buf(),
-        source,
-    };
-    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(io)?
-        .map(|e| e.map(|e| e.path()))
-        .collect::<std::io::Result<_>>()
-        .map_err(io)?;
-    paths.retain(|p| {
-        p.extension()
-            .and_then(|e| e.to_str())
-            .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "png" | "pgm" | "ppm"))
-    });
-    paths.sort();
-    if paths.is_empty() {
-        return Err(Error::EmptySequence {
-            path: dir.to_path_buf(),
-        });
-    }
-    let frames = paths
-        .iter()
-        .map(|p| read_image(p))
+    let folder = FrameFolder::open(dir)?;
+    let frames = folder
+        .frames()
+        .map(|f| folder.load(f))
         .collect::<Result<Vec<_>>>()?;
     check_sequence(&frames)?;
     Ok(frames)
+}
+
+/// A folder of frames, the one frame-folder reader: the image of each frame number (the last
+/// run of digits of the file name, so MOTChallenge's `img1/000001.png` is frame 1), checked
+/// for equal sizes from the headers alone and decoded one at a time by [`FrameFolder::load`],
+/// so memory does not grow with the folder. PNG, PGM and PPM decode; a `.jpg` is listed so that
+/// its error says to convert it (the workspace builds `image` without JPEG).
+#[derive(Debug, Clone)]
+pub struct FrameFolder {
+    dir: PathBuf,
+    frames: BTreeMap<u32, PathBuf>,
+    size: (u32, u32),
+}
+
+/// The extensions listed (lower case).
+const FOLDER_EXTENSIONS: [&str; 5] = ["png", "pgm", "ppm", "jpg", "jpeg"];
+
+/// The frame number of a file: the last run of ASCII digits of its stem.
+pub(crate) fn frame_number(path: &Path) -> Option<u32> {
+    let stem = path.file_stem()?.to_str()?;
+    let end = stem.rfind(|c: char| c.is_ascii_digit())? + 1;
+    let start = stem[..end]
+        .rfind(|c: char| !c.is_ascii_digit())
+        .map_or(0, |i| i + 1);
+    stem[start..end].parse().ok()
+}
+
+fn is_jpeg(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| matches!(e.to_ascii_lowercase().as_str(), "jpg" | "jpeg"))
+}
+
+/// An image error with a hint for JPEG files (not built in).
+fn folder_image_err(path: &Path, reason: String) -> Error {
+    let reason = if is_jpeg(path) {
+        format!(
+            "{reason}; JPEG is not built into this tool (the image crate has PNG and PNM \
+             only): convert the folder to PNG, e.g. `mogrify -format png *.jpg`"
+        )
+    } else {
+        reason
+    };
+    Error::Image {
+        path: path.to_path_buf(),
+        reason,
+    }
+}
+
+/// An image's size from its header alone.
+fn header_size(path: &Path) -> Result<(u32, u32)> {
+    let err = |e: &dyn std::fmt::Display| folder_image_err(path, e.to_string());
+    image::ImageReader::open(path)
+        .map_err(|e| err(&e))?
+        .with_guessed_format()
+        .map_err(|e| err(&e))?
+        .into_dimensions()
+        .map_err(|e| err(&e))
+}
+
+impl FrameFolder {
+    /// Lists `dir`'s images by frame number and reads each one's header (not its pixels) to
+    /// check that all have the first one's size.
+    pub fn open(dir: &Path) -> Result<Self> {
+        let io = |source| Error::Io {
+            path: dir.to_path_buf(),
+            source,
+        };
+        let mut frames: BTreeMap<u32, PathBuf> = BTreeMap::new();
+        for entry in std::fs::read_dir(dir).map_err(io)? {
+            let path = entry.map_err(io)?.path();
+            let wanted = path
+                .extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| FOLDER_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()));
+            if !wanted || !path.is_file() {
+                continue;
+            }
+            let frame =
+                frame_number(&path).ok_or_else(|| Error::NoFrameNumber { path: path.clone() })?;
+            if let Some(other) = frames.insert(frame, path.clone()) {
+                let mut paths = [other, path];
+                paths.sort();
+                return Err(Error::DuplicateFrame { frame, paths });
+            }
+        }
+        let mut size = None;
+        for path in frames.values() {
+            let this = header_size(path)?;
+            match size {
+                None => size = Some(this),
+                Some(expected) if expected != this => {
+                    return Err(Error::SizeMismatch {
+                        path: path.clone(),
+                        size: this,
+                        expected,
+                    });
+                }
+                Some(_) => {}
+            }
+        }
+        let Some(size) = size else {
+            return Err(Error::EmptySequence {
+                path: dir.to_path_buf(),
+            });
+        };
+        Ok(Self {
+            dir: dir.to_path_buf(),
+            frames,
+            size,
+        })
+    }
+
+    /// The folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// The frame numbers, in order.
+    pub fn frames(&self) -> impl Iterator<Item = u32> + '_ {
+        self.frames.keys().copied()
+    }
+
+    /// Whether the folder has an image of `frame`.
+    pub fn contains(&self, frame: u32) -> bool {
+        self.frames.contains_key(&frame)
+    }
+
+    /// The number of images.
+    pub fn len(&self) -> usize {
+        self.frames.len()
+    }
+
+    /// Whether the folder has no image (never, for a folder [`FrameFolder::open`] returned).
+    pub fn is_empty(&self) -> bool {
+        self.frames.is_empty()
+    }
+
+    /// The images' size (width, height).
+    pub fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    /// Decodes the image of `frame`; [`Error::NoSuchFrame`] when the folder has none.
+    pub fn load(&self, frame: u32) -> Result<VideoFrame> {
+        let path = self.frames.get(&frame).ok_or_else(|| Error::NoSuchFrame {
+            frame,
+            dir: self.dir.clone(),
+        })?;
+        let bytes = std::fs::read(path).map_err(|source| Error::Io {
+            path: path.clone(),
+            source,
+        })?;
+        let decoded = decode_image(&bytes, path).map_err(|e| match e {
+            Error::Image { path, reason } => folder_image_err(&path, reason),
+            other => other,
+        })?;
+        let size = (decoded.width(), decoded.height());
+        if size != (self.size.0 as usize, self.size.1 as usize) {
+            // The file changed since `open` read its header.
+            return Err(Error::SizeMismatch {
+                path: path.clone(),
+                size: (size.0 as u32, size.1 as u32),
+                expected: self.size,
+            });
+        }
+        Ok(decoded)
+    }
 }
 
 /// Writes frames as `prefix000000.ext`, `prefix000001.ext`, … in `dir`.

@@ -1,4 +1,5 @@
-//! Video sensing for the audio-video tracker (Kushwaha et al. 2008, our algorithms.md §5.2–5.3).
+//! Video sensing for the audio-video tracker (Kushwaha, Oh, Amundson, Koutsoukos & Ledeczi, MFI 2008: background
+//! subtraction and the detection function over angles).
 //!
 //! A camera node segments moving objects with the adaptive background mixture model of
 //! KaewTraKulPong & Bowden (AVBS 2001) with shadow detection, cleans the mask, and reports

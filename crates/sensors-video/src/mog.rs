@@ -10,7 +10,7 @@
 //!     ω_k ← ω_k + (p̂_k − ω_k)/(N+1), and for the match, with c_k its number of matches
 //!     (counting the frame that created it) after this one: μ ← μ + (x − μ)/c_k,
 //!     σ² ← σ² + ((x − μ_old)² − σ²)/c_k;
-//!   - N ≥ L, the L-recent window (eq. 8–10, read as in our algorithms.md §5.2):
+//!   - N ≥ L, the L-recent window (KaewTraKulPong & Bowden 2001, eqs. 8–10):
 //!     ω_k ← ω_k + (p̂_k − ω_k)/L, and for the match ρ = 1/(L·ω_k) with the updated ω_k:
 //!     μ ← μ + ρ(x − μ), σ² ← σ² + ρ((x − μ_old)² − σ²);
 //!   - every variance is floored at σ²_min = 15² (OpenCV's `minVar`);

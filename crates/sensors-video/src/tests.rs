@@ -559,7 +559,11 @@ fn bad_input_gets_typed_errors() {
     }
     assert!(matches!(
         io::read_image_sequence(&dir),
-        Err(Error::FrameChanged { index: 2, .. })
+        Err(Error::SizeMismatch {
+            size: (6, 8),
+            expected: (8, 6),
+            ..
+        })
     ));
     let mut m = BackgroundModel::new(&MogConfig::default(), 8, 6, PixelFormat::Grey).unwrap();
     m.apply(&frames[0]).unwrap();
@@ -655,4 +659,14 @@ fn parse_with_unknown_field() -> std::result::Result<MogConfig, String> {
         [("history", 100u64), ("n_mixtures", 4), ("bogus", 1)].into_iter(),
     );
     serde::Deserialize::deserialize(value).map_err(|e: serde::de::value::Error| e.to_string())
+}
+
+#[test]
+fn frame_numbers_come_from_the_last_digits_of_the_name() {
+    use std::path::Path;
+    assert_eq!(io::frame_number(Path::new("img1/000001.png")), Some(1));
+    assert_eq!(io::frame_number(Path::new("cam2_frame0042.png")), Some(42));
+    assert_eq!(io::frame_number(Path::new("7-x.png")), Some(7));
+    assert_eq!(io::frame_number(Path::new("frame.png")), None);
+    assert_eq!(io::frame_number(Path::new("99999999999999.png")), None);
 }

@@ -17,6 +17,8 @@
 //! * [`Scan`]s of [`Measurement`]s with their hidden [`Origin`], and the [`Track`] /
 //!   [`TrackSet`] output type that every tracker returns and every metric reads.
 //! * The MCMCDA scenario [`SimulationConfig`] → [`Simulator`] (Oh, Russell & Sastry 2009).
+//! * The one tracker interface: [`Detection`] in; [`Tracker`] (step by frame, then finish)
+//!   or [`BatchTracker`] (a whole window); [`Online`] runs the first as the second.
 //! * MOTChallenge rows: [`parse_mot`], [`format_mot`], conversions to and from [`TrackSet`].
 //! * [`assignment`]: optimal one-to-one matching (SciPy's solver, via `lsap`).
 //! * [`LocalDetector`] / [`LocalDetectorFactory`]: the interface of per-object detectors
@@ -64,6 +66,7 @@ mod models;
 mod mot;
 mod simulate;
 mod track;
+mod tracking;
 
 #[cfg(test)]
 mod tests;
@@ -90,4 +93,8 @@ pub use mot::{MotFile, MotRow, format_mot, parse_mot, read_mot};
 pub use simulate::{Simulation, SimulationConfig, Simulator};
 pub use track::{
     Frame, FrameClock, Location, Measurement, Origin, Scan, Track, TrackId, TrackPoint, TrackSet,
+};
+pub use tracking::{
+    BatchTracker, Detection, DetectionId, FrameDetections, Online, Stamp, TrackState, Tracker,
+    scans_of,
 };

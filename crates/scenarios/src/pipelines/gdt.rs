@@ -5,7 +5,7 @@
 //! the format of Oh & Jung's Table 1 with a 95 % interval, paired differences to our method,
 //! MAE against gap length, and time per gap (Table 2).
 //!
-//! Fairness (issue 12): every fair row sees only the observations of the two segments. GDT and
+//! Fairness: every fair row sees only the observations of the two segments. GDT and
 //! its goal-state variant estimate their noise (r, q) by maximum likelihood over those
 //! observations; the rows with the simulator's σ² and the hand-set q are labelled "oracle
 //! noise". The smoothing spline's λ (GCV) and the window fits' n (cross-validation on

@@ -10,8 +10,8 @@ use eval_metrics::{EvalConfig, EvalReport, evaluate};
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 
-use crate::mot::parse_evaluation_pair;
 use crate::{Claim, Env, Metrics, Pipeline, Section, Table, fmt_num};
+use mot::text::parse_evaluation_pair;
 
 /// The `mot-eval` pipeline.
 pub struct MotEval;

@@ -1,8 +1,8 @@
 //! `mot-realistic`: `cargo xtask track`'s trackers (offline and online MCMCDA, GNN smoothed and
-//! online, SMC-PHD) on realistic pedestrian detection files ([`crate::walkers`]: border-cut
+//! online, SMC-PHD) on realistic pedestrian detection files ([`mot::walkers`]: border-cut
 //! boxes, walkers who stop and turn, occlusion, recall ≈ 0.8, 3 % jitter, scored false boxes),
 //! with no per-sequence tuning: every model is fitted to the file by
-//! [`crate::track::fit_model`] and [`crate::track::fit_scores`]. Scored with
+//! [`mot::track::fit_model`] and [`mot::track::fit_scores`]. Scored with
 //! eval-metrics (MOTA, IDF1, IDSW) against the sequences' truth, beside Stone Soup's GNN and JPDA
 //! tuned on separate sequences (`docs/comparisons/stonesoup_realistic.py`, numbers recorded in
 //! the scenario file).
@@ -15,9 +15,9 @@ use serde::Deserialize;
 use tracker_model::TrackSet;
 
 use crate::stats::mean_ci;
-use crate::track::{TrackConfig, Tracker, track_detections};
-use crate::walkers::WalkersConfig;
 use crate::{Claim, Env, Headline, Metrics, Pipeline, Section, Table, fmt_num};
+use mot::track::{TrackConfig, TrackerKind, track_detections};
+use mot::walkers::WalkersConfig;
 
 /// The `mot-realistic` pipeline.
 pub struct MotRealistic;
@@ -57,7 +57,7 @@ pub struct PeerRow {
 #[serde(deny_unknown_fields)]
 pub struct Params {
     /// Trackers to run.
-    trackers: Vec<Tracker>,
+    trackers: Vec<TrackerKind>,
     /// The reported sequences.
     sequences: Vec<SequenceSpec>,
     /// The orderings of [`ORDERINGS`] the report claims (the rest are shown, not claimed).
@@ -69,7 +69,7 @@ pub struct Params {
 /// One tracker on one sequence.
 #[derive(Debug, Clone)]
 pub struct Score {
-    tracker: Tracker,
+    tracker: TrackerKind,
     sequence: usize,
     mota: f64,
     idf1: f64,
@@ -88,7 +88,7 @@ pub struct Output {
     scores: Vec<Score>,
 }
 
-/// The orderings of issue 13's "done when", by key.
+/// The orderings the scenario states (offline and online against the tuned peer), by key.
 const ORDERINGS: [&str; 10] = [
     "mcmcda_mota_ge_peer_best_offline",
     "mcmcda_idf1_ge_peer_best_offline",
@@ -103,11 +103,11 @@ const ORDERINGS: [&str; 10] = [
 ];
 
 impl Output {
-    fn of(&self, tracker: Tracker) -> impl Iterator<Item = &Score> {
+    fn of(&self, tracker: TrackerKind) -> impl Iterator<Item = &Score> {
         self.scores.iter().filter(move |s| s.tracker == tracker)
     }
 
-    fn mean(&self, tracker: Tracker, f: impl Fn(&Score) -> f64) -> (f64, f64) {
+    fn mean(&self, tracker: TrackerKind, f: impl Fn(&Score) -> f64) -> (f64, f64) {
         mean_ci(self.of(tracker).map(f))
     }
 
@@ -145,52 +145,52 @@ impl Output {
             .map(|t| self.peer_mean(t, "online", |r| r.mota))
             .into_iter()
             .fold(f64::NEG_INFINITY, f64::max);
-        let gnn_ms = self.mean(Tracker::Gnn, |s| s.ms_per_frame).0;
+        let gnn_ms = self.mean(TrackerKind::Gnn, |s| s.ms_per_frame).0;
         vec![
             (
                 ORDERINGS[0],
                 format!(
                     "offline MCMCDA's mean MOTA ({}) ≥ the tuned peer's best offline mean MOTA ({})",
-                    fmt_num(mota(Tracker::Mcmcda)),
+                    fmt_num(mota(TrackerKind::Mcmcda)),
                     fmt_num(best_off_mota)
                 ),
-                mota(Tracker::Mcmcda) >= best_off_mota,
+                mota(TrackerKind::Mcmcda) >= best_off_mota,
             ),
             (
                 ORDERINGS[1],
                 format!(
                     "offline MCMCDA's mean IDF1 ({}) ≥ the tuned peer's best offline mean IDF1 ({})",
-                    fmt_num(idf1(Tracker::Mcmcda)),
+                    fmt_num(idf1(TrackerKind::Mcmcda)),
                     fmt_num(best_off_idf1)
                 ),
-                idf1(Tracker::Mcmcda) >= best_off_idf1,
+                idf1(TrackerKind::Mcmcda) >= best_off_idf1,
             ),
             (
                 ORDERINGS[2],
                 format!(
                     "the PHD tracker's mean MOTA ({}) ≥ the peer's online GNN ({})",
-                    fmt_num(mota(Tracker::Phd)),
+                    fmt_num(mota(TrackerKind::Phd)),
                     fmt_num(peer_online_gnn)
                 ),
-                mota(Tracker::Phd) >= peer_online_gnn,
+                mota(TrackerKind::Phd) >= peer_online_gnn,
             ),
             (
                 ORDERINGS[3],
                 format!(
                     "online MCMCDA's mean MOTA ({}) ≥ the peer's online GNN ({})",
-                    fmt_num(mota(Tracker::McmcdaOnline)),
+                    fmt_num(mota(TrackerKind::McmcdaOnline)),
                     fmt_num(peer_online_gnn)
                 ),
-                mota(Tracker::McmcdaOnline) >= peer_online_gnn,
+                mota(TrackerKind::McmcdaOnline) >= peer_online_gnn,
             ),
             (
                 ORDERINGS[4],
                 format!(
                     "GNN's mean MOTA ({}) is at least the peer's GNN (best output, {}) − 0.01",
-                    fmt_num(mota(Tracker::Gnn)),
+                    fmt_num(mota(TrackerKind::Gnn)),
                     fmt_num(peer_gnn_best)
                 ),
-                mota(Tracker::Gnn) >= peer_gnn_best - 0.01,
+                mota(TrackerKind::Gnn) >= peer_gnn_best - 0.01,
             ),
             (
                 ORDERINGS[5],
@@ -206,38 +206,38 @@ impl Output {
                 ORDERINGS[6],
                 format!(
                     "offline MCMCDA's mean MOTA ({}) ≥ the peer's best online mean MOTA ({})",
-                    fmt_num(mota(Tracker::Mcmcda)),
+                    fmt_num(mota(TrackerKind::Mcmcda)),
                     fmt_num(best_online)
                 ),
-                mota(Tracker::Mcmcda) >= best_online,
+                mota(TrackerKind::Mcmcda) >= best_online,
             ),
             (
                 ORDERINGS[7],
                 format!(
                     "offline MCMCDA's mean MOTA ({}) > our GNN's ({}) on the same fitted model",
-                    fmt_num(mota(Tracker::Mcmcda)),
-                    fmt_num(mota(Tracker::Gnn))
+                    fmt_num(mota(TrackerKind::Mcmcda)),
+                    fmt_num(mota(TrackerKind::Gnn))
                 ),
-                mota(Tracker::Mcmcda) > mota(Tracker::Gnn),
+                mota(TrackerKind::Mcmcda) > mota(TrackerKind::Gnn),
             ),
             (
                 ORDERINGS[8],
                 format!(
                     "GNN's mean MOTA ({}) is at least the peer's online GNN ({}) − 0.01",
-                    fmt_num(mota(Tracker::Gnn)),
+                    fmt_num(mota(TrackerKind::Gnn)),
                     fmt_num(peer_online_gnn)
                 ),
-                mota(Tracker::Gnn) >= peer_online_gnn - 0.01,
+                mota(TrackerKind::Gnn) >= peer_online_gnn - 0.01,
             ),
             (
                 ORDERINGS[9],
                 format!(
                     "online GNN's mean MOTA ({}, frame-by-frame output with coasting, like the \
                      peer's) is at least the peer's online GNN ({}) − 0.01",
-                    fmt_num(mota(Tracker::GnnOnline)),
+                    fmt_num(mota(TrackerKind::GnnOnline)),
                     fmt_num(peer_online_gnn)
                 ),
-                mota(Tracker::GnnOnline) >= peer_online_gnn - 0.01,
+                mota(TrackerKind::GnnOnline) >= peer_online_gnn - 0.01,
             ),
         ]
     }
@@ -265,12 +265,12 @@ impl Pipeline for MotRealistic {
                 }
                 .generate_seeded(s.seed)
             })
-            .collect::<Result<Vec<_>>>()?;
+            .collect::<Result<Vec<_>, mot::Error>>()?;
         let gts = seqs
             .iter()
             .map(|s| Ok(TrackSet::from_mot_rows(&s.gt)?))
             .collect::<Result<Vec<_>>>()?;
-        let jobs: Vec<(usize, Tracker)> = (0..seqs.len())
+        let jobs: Vec<(usize, TrackerKind)> = (0..seqs.len())
             .flat_map(|i| p.trackers.iter().map(move |&t| (i, t)))
             .collect();
         env.progress.set_length(jobs.len() as u64);
@@ -419,7 +419,7 @@ impl Pipeline for MotRealistic {
             ]);
         }
         let mut orderings = Table::new(
-            "Issue 13's orderings (claimed ones are checked by the suite; an unclaimed one either \
+            "The orderings (claimed ones are checked by the suite; an unclaimed one either \
              fails, where we lose, or compares our output, smoothed over the whole file, with \
              the peer's online output)",
             &["ordering", "holds", "claimed"],
@@ -439,7 +439,7 @@ impl Pipeline for MotRealistic {
         Section {
             title: "Trackers on realistic pedestrian detections (mot-realistic)".into(),
             summary: format!(
-                "{} generated sequences (scenarios::walkers, seeds separate from the peer's \
+                "{} generated sequences (mot::walkers, seeds separate from the peer's \
                  tuning seeds); every tracker fitted to each file, no per-sequence tuning. The \
                  peer is Stone Soup 1.9 GNN and JPDA with a constant-velocity box model tuned on \
                  the tuning sequences (docs/comparisons/stonesoup_realistic.py).",
@@ -468,13 +468,13 @@ impl Pipeline for MotRealistic {
                 quantity: "MOTA, offline MCMCDA vs Stone Soup's best offline (mot-realistic)"
                     .into(),
                 paper: None,
-                ours: fmt_num(out.mean(Tracker::Mcmcda, |s| s.mota).0),
+                ours: fmt_num(out.mean(TrackerKind::Mcmcda, |s| s.mota).0),
                 peer: Some(fmt_num(best_off)),
             },
             Headline {
                 quantity: "MOTA, online MCMCDA vs Stone Soup's online GNN (mot-realistic)".into(),
                 paper: None,
-                ours: fmt_num(out.mean(Tracker::McmcdaOnline, |s| s.mota).0),
+                ours: fmt_num(out.mean(TrackerKind::McmcdaOnline, |s| s.mota).0),
                 peer: Some(fmt_num(out.peer_mean("gnn", "online", |r| r.mota))),
             },
         ]

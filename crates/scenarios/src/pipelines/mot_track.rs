@@ -8,9 +8,9 @@ use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use tracker_model::TrackSet;
 
-use crate::mot::parse_detections;
-use crate::track::{Tracker, track_detections};
 use crate::{Env, Metrics, Pipeline, Section, Table, fmt_num};
+use mot::text::parse_detections;
+use mot::track::{TrackerKind, track_detections};
 
 /// The `mot-track` pipeline.
 pub struct MotTrack;
@@ -24,12 +24,12 @@ pub struct Params {
     /// Ground truth, relative to the workspace root.
     gt: String,
     /// Trackers to run.
-    trackers: Vec<Tracker>,
+    trackers: Vec<TrackerKind>,
 }
 
 /// One tracker's result.
 pub struct TrackerResult {
-    tracker: Tracker,
+    tracker: TrackerKind,
     n_tracks: usize,
     report: EvalReport,
 }

@@ -1,5 +1,5 @@
 //! `av-fusion`: the audio-video tracker of Kushwaha, Oh, Amundson, Koutsoukos & Ledeczi
-//! (MFI 2008; seed 000 §V, Figs. 7–11) end to end. Table 1's layout: a 35 × 20 m region in
+//! (MFI 2008, Figs. 7–11; reviewed in Oh 2012, §V) end to end. Table 1's layout: a 35 × 20 m region in
 //! 0.5 m cells, six acoustic nodes (36 beams) and three cameras (160 angles) either side of a
 //! road. Vehicles are simulated through sensors-audio (engine-like sources, ground reflection,
 //! diffuse background noise) and through the sensors-video renderer (cameras at an angle to
@@ -42,8 +42,8 @@ use tuning::*;
 
 use crate::stats::mean_ci;
 use crate::{
-    BAR_WIDTH, Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style,
-    Table, fmt_num,
+    BAR_WIDTH, Chart, Claim, Developer, Env, Figure, Headline, Metrics, Pipeline, Section, Series,
+    Style, Table, fmt_num,
 };
 
 /// The `av-fusion` pipeline.
@@ -803,18 +803,7 @@ impl Pipeline for AvFusion {
             }
         }
         let runs = run_specs(p)?;
-        if std::env::var_os(TUNE_ENV).is_some() {
-            print_tuning(p, &runs)?;
-        }
-        if let Some(which) = std::env::var_os(FIT_SCORES_ENV) {
-            fit_peak_scores(p, &runs, &which.to_string_lossy())?;
-        }
-        if let Some(which) = std::env::var_os(TUNE_MULTI_ENV) {
-            tune_multi(p, &runs, &which.to_string_lossy())?;
-        }
-        if let Some(seeds) = std::env::var_os(DIAG_ENV) {
-            diagnose(p, &runs, &seeds.to_string_lossy())?;
-        }
+        run_developer_tools(env.developer, p, &runs)?;
         env.progress.set_length(runs.len() as u64);
         let base = rng.clone();
         let n_passes = p.passes.len();

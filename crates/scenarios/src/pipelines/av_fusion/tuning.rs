@@ -6,7 +6,7 @@
 
 use super::*;
 
-/// Setting this environment variable makes the scenario run [`Tuning`]'s grid search on its
+/// Setting this developer option makes the scenario run [`Tuning`]'s grid search on its
 /// tuning seeds first and print it (the reported results do not change).
 pub(super) const TUNE_ENV: &str = "AV_FUSION_TUNE";
 
@@ -178,6 +178,27 @@ pub(super) fn stage1_choice(
     best
 }
 
+/// Runs the developer tools the caller asked for: `AV_FUSION_TUNE` (the single-vehicle
+/// search, [`tune`]), `AV_FUSION_FIT_SCORES=<approaches>` (the peak-score tables,
+/// [`fit_peak_scores`]), `AV_FUSION_TUNE_MULTI=<approaches>` (the multi-vehicle search,
+/// [`tune_multi`]) and `AV_FUSION_DIAG=<seeds>` (per-tick diagnostics, [`diagnose`]); `cargo
+/// xtask scenarios` reads them from the environment variables of those names.
+pub(super) fn run_developer_tools(dev: &dyn Developer, p: &Params, runs: &[RunSpec]) -> Result<()> {
+    if dev.option(TUNE_ENV).is_some() {
+        print_tuning(dev, p, runs)?;
+    }
+    if let Some(which) = dev.option(FIT_SCORES_ENV) {
+        fit_peak_scores(dev, p, runs, &which)?;
+    }
+    if let Some(which) = dev.option(TUNE_MULTI_ENV) {
+        tune_multi(dev, p, runs, &which)?;
+    }
+    if let Some(seeds) = dev.option(DIAG_ENV) {
+        diagnose(dev, p, runs, &seeds)?;
+    }
+    Ok(())
+}
+
 /// Grid search on the tuning seeds, run for each of the six approaches on its own, from the
 /// configured values, by the same stages and objectives. Stage 1: the profile exponent γ of
 /// each modality the approach uses, for audio+video the video weight w_v (audio weight 1),
@@ -187,21 +208,13 @@ pub(super) fn stage1_choice(
 /// approach's mean MOTA over every run (single and multi-vehicle). Stage 2b: the peaks' κ by
 /// the same MOTA. Ties keep the earlier candidate. The stages repeat until a round changes
 /// nothing (at most `max_rounds`).
-#[expect(
-    clippy::print_stderr,
-    reason = "the grid search is a developer command whose table goes to the terminal"
-)]
-pub(super) fn print_tuning(p: &Params, runs: &[RunSpec]) -> Result<()> {
-    let tuned = tune(p, runs)?;
-    eprintln!("{tuned}");
+pub(super) fn print_tuning(dev: &dyn Developer, p: &Params, runs: &[RunSpec]) -> Result<()> {
+    let tuned = tune(dev, p, runs)?;
+    dev.say(&tuned);
     Ok(())
 }
 
-#[expect(
-    clippy::print_stderr,
-    reason = "the grid search takes minutes: each line goes to the terminal as it is measured"
-)]
-pub(super) fn tune(p: &Params, runs: &[RunSpec]) -> Result<String> {
+pub(super) fn tune(dev: &dyn Developer, p: &Params, runs: &[RunSpec]) -> Result<String> {
     let t = &p.tuning;
     ensure!(!t.seeds.is_empty(), "no tuning seeds");
     let mut sims = Vec::new();
@@ -237,7 +250,7 @@ pub(super) fn tune(p: &Params, runs: &[RunSpec]) -> Result<String> {
             "bearing error of the profile maximum at {calib:?}: {}",
             text.join(", ")
         );
-        eprintln!("{text}");
+        dev.say(&text);
         out.push_str(&text);
         out.push('\n');
     }
@@ -247,7 +260,7 @@ pub(super) fn tune(p: &Params, runs: &[RunSpec]) -> Result<String> {
             "{what}: error {:.3} m, MOTA {:.3} (multi-vehicle {:.3}, peak recall {:.2}, false peaks/tick {:.2})",
             s.error_m, s.mota, s.multi_mota, s.peak_recall, s.false_peaks
         );
-        eprintln!("{text}");
+        dev.say(&text);
         out.push_str(&text);
         out.push('\n');
     };
@@ -260,7 +273,7 @@ pub(super) fn tune(p: &Params, runs: &[RunSpec]) -> Result<String> {
         for round in 1..=t.max_rounds.max(1) {
             let before = *q.settings.get(a);
             let text = format!("{name}: round {round}");
-            eprintln!("{text}");
+            dev.say(&text);
             out.push_str(&text);
             out.push('\n');
             // Stage 1: the grid of the parameters this approach uses (a single value elsewhere).
@@ -409,7 +422,7 @@ pub(super) fn tune(p: &Params, runs: &[RunSpec]) -> Result<String> {
             key(name).replace("audiovideo", "audio_video"),
             fields.join(", ")
         );
-        eprintln!("{text}");
+        dev.say(&text);
         out.push_str(&text);
         out.push('\n');
     }
@@ -445,8 +458,12 @@ pub struct ScoreFit {
 /// the reported seed is never simulated here). The contrasts are binned at their pooled
 /// quantiles and each bin's ln f₁/f₀ is the log ratio of its share of the near peaks to its
 /// share of the far ones, each count plus one (Laplace), so an empty bin stays finite.
-#[expect(clippy::print_stderr, reason = "developer tool output")]
-pub(super) fn fit_peak_scores(p: &Params, runs: &[RunSpec], which: &str) -> Result<()> {
+pub(super) fn fit_peak_scores(
+    dev: &dyn Developer,
+    p: &Params,
+    runs: &[RunSpec],
+    which: &str,
+) -> Result<()> {
     let f = &p.score_fit;
     ensure!(f.bins >= 2, "score_fit.bins must be at least 2");
     ensure!(f.max_peaks >= 1, "score_fit.max_peaks must be at least 1");
@@ -479,18 +496,18 @@ pub(super) fn fit_peak_scores(p: &Params, runs: &[RunSpec], which: &str) -> Resu
         let peaks: Vec<(f64, bool)> = labelled.into_iter().flatten().collect();
         let (table, counts) = score_table(&peaks, f.bins)?;
         let [far_n, near_n] = totals(&counts);
-        eprintln!(
+        dev.say(&format!(
             "scores {} ({near_n} near, {far_n} far peaks; per bin far/near {counts:?}):",
             APPROACHES[a].0
-        );
+        ));
         // Shortest round-trip form: the pasted table is the fitted one to the bit.
         let fmt = |v: &[f64]| v.iter().map(f64::to_string).collect::<Vec<_>>().join(", ");
-        eprintln!(
+        dev.say(&format!(
             "{} = {{ contrast_edges = [{}], log_ratios = [{}] }}",
             settings_key(a),
             fmt(&table.contrast_edges),
             fmt(&table.log_ratios)
-        );
+        ));
     }
     Ok(())
 }
@@ -565,8 +582,8 @@ fn approaches_in(which: &str) -> Result<Vec<usize>> {
 /// From `start`, one coordinate at a time over its candidates (the others held), keeping a
 /// candidate that raises `objective`; rounds repeat until one changes nothing, at most
 /// `max_rounds` (≥ 1). Returns the end point and its objective.
-#[expect(clippy::print_stderr, reason = "developer tool output")]
 fn coordinate_search(
+    dev: &dyn Developer,
     name: &str,
     start: ApproachSettings,
     coords: &[Coordinate],
@@ -575,7 +592,9 @@ fn coordinate_search(
 ) -> Result<(ApproachSettings, f64)> {
     let mut best = start;
     let (mut best_score, motas) = objective(&best)?;
-    eprintln!("multi {name}: from {start:?}: MOTA {best_score:.3} {motas:.2?}");
+    dev.say(&format!(
+        "multi {name}: from {start:?}: MOTA {best_score:.3} {motas:.2?}"
+    ));
     for round in 1..=max_rounds.max(1) {
         let before = best;
         for (what, values, set) in coords {
@@ -586,14 +605,18 @@ fn coordinate_search(
                     continue;
                 }
                 let (m, motas) = objective(&c)?;
-                eprintln!("multi {name} round {round}: {what} {v}: MOTA {m:.3} {motas:.2?}");
+                dev.say(&format!(
+                    "multi {name} round {round}: {what} {v}: MOTA {m:.3} {motas:.2?}"
+                ));
                 if m > best_score {
                     best = c;
                     best_score = m;
                 }
             }
         }
-        eprintln!("multi {name} round {round} choice: MOTA {best_score:.3} {best:?}");
+        dev.say(&format!(
+            "multi {name} round {round} choice: MOTA {best_score:.3} {best:?}"
+        ));
         if best == before {
             break;
         }
@@ -638,11 +661,12 @@ pub(super) fn fade_with(
     })
 }
 
-#[expect(
-    clippy::print_stderr,
-    reason = "the search takes minutes: each line goes to the terminal as it is measured"
-)]
-pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()> {
+pub(super) fn tune_multi(
+    dev: &dyn Developer,
+    p: &Params,
+    runs: &[RunSpec],
+    which: &str,
+) -> Result<()> {
     let order = approaches_in(which)?;
     let t = &p.multi_tuning;
     let mut sims = Vec::new();
@@ -757,7 +781,7 @@ pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()
         let (mut best, mut best_score) = (configured, f64::NEG_INFINITY);
         for start in starts {
             let (end, score) =
-                coordinate_search(name, start, &coords, t.max_rounds, |c| objective(a, c))?;
+                coordinate_search(dev, name, start, &coords, t.max_rounds, |c| objective(a, c))?;
             if score > best_score {
                 (best, best_score) = (end, score);
             }
@@ -765,7 +789,7 @@ pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()
         chosen.push((settings_key(a), best, best_score));
     }
     for (k, s, m) in chosen {
-        eprintln!("{k} (MOTA {m:.3}) = {s:?}");
+        dev.say(&format!("{k} (MOTA {m:.3}) = {s:?}"));
     }
     Ok(())
 }
@@ -773,8 +797,12 @@ pub(super) fn tune_multi(p: &Params, runs: &[RunSpec], which: &str) -> Result<()
 /// `AV_FUSION_DIAG=1,2,3`: where the multi-vehicle runs' MOTA errors come from.
 pub(super) const DIAG_ENV: &str = "AV_FUSION_DIAG";
 
-#[expect(clippy::print_stderr, reason = "developer diagnostics")]
-pub(super) fn diagnose(p: &Params, runs: &[RunSpec], seeds: &str) -> Result<()> {
+pub(super) fn diagnose(
+    dev: &dyn Developer,
+    p: &Params,
+    runs: &[RunSpec],
+    seeds: &str,
+) -> Result<()> {
     for seed in seeds
         .split(',')
         .filter_map(|s| s.trim().parse::<u64>().ok())
@@ -801,7 +829,7 @@ pub(super) fn diagnose(p: &Params, runs: &[RunSpec], seeds: &str) -> Result<()> 
                     per_vehicle.push(format!("{near}/{n}"));
                 }
                 let (_, _, false_peaks, ticks) = peak_counts(sim, &s.result);
-                eprintln!(
+                dev.say(&format!(
                     "seed {seed} run {r} {}: MOTA {:.3} OSPA {:.2} | TP {} FN {} FP {} IDSW {} frag {} | tracks {} | peaks near vehicle {} | false peaks {}/{} ticks",
                     name,
                     c.mota,
@@ -815,7 +843,7 @@ pub(super) fn diagnose(p: &Params, runs: &[RunSpec], seeds: &str) -> Result<()> 
                     per_vehicle.join(" "),
                     false_peaks,
                     ticks
-                );
+                ));
             }
         }
     }

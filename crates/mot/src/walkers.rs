@@ -17,7 +17,7 @@
 //! true boxes ≈ N(0.72, 0.15) lowered by occlusion, false boxes ≈ N(0.45, 0.15): lower on
 //! average, overlapping.
 
-use anyhow::{Result, bail};
+use crate::error::{Result, invalid};
 use rand::RngExt;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal, Poisson};
@@ -122,24 +122,24 @@ impl WalkersConfig {
             ("fps", self.fps),
             ("duration_s", self.duration_s),
         ] {
-            if !(v.is_finite() && v > 0.0) {
-                bail!("walkers: {name} = {v}; it must be finite and > 0");
-            }
+            tracker_model::ensure_positive(v, name)?;
         }
         for (name, v) in [
             ("arrivals_per_s", self.arrivals_per_s),
             ("jitter", self.jitter),
             ("false_per_frame", self.false_per_frame),
         ] {
-            if !(v.is_finite() && v >= 0.0) {
-                bail!("walkers: {name} = {v}; it must be finite and ≥ 0");
-            }
+            tracker_model::ensure_non_negative(v, name)?;
         }
-        if !(0.0..=1.0).contains(&self.recall) {
-            bail!("walkers: recall = {}; it must be in [0, 1]", self.recall);
-        }
+        tracker_model::ensure_in_range(self.recall, 0.0, 1.0, "recall")?;
         if self.fps * self.duration_s > 1e6 {
-            bail!("walkers: more than a million frames");
+            return Err(invalid(
+                "duration_s",
+                format!(
+                    "fps · duration_s = {} frames is over a million",
+                    self.fps * self.duration_s
+                ),
+            ));
         }
         Ok(())
     }
@@ -244,7 +244,7 @@ impl WalkersConfig {
         self.check()?;
         let n_frames = (self.fps * self.duration_s).round().max(1.0) as Frame;
         let dt = 1.0 / self.fps;
-        let unit = Normal::new(0.0, 1.0)?;
+        let unit = Normal::new(0.0, 1.0).map_err(|e| invalid("jitter", e.to_string()))?;
         let arrivals = self.arrivals_per_s * dt;
         let mut walkers: Vec<Walker> = (0..self.initial_walkers)
             .map(|_| self.spawn(rng, true))
@@ -328,7 +328,9 @@ impl WalkersConfig {
                 }
             }
             let n_false = if self.false_per_frame > 0.0 {
-                Poisson::new(self.false_per_frame)?.sample(rng) as usize
+                Poisson::new(self.false_per_frame)
+                    .map_err(|e| invalid("false_per_frame", e.to_string()))?
+                    .sample(rng) as usize
             } else {
                 0
             };

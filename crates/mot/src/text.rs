@@ -10,13 +10,15 @@
 //! - empty predictions are scored, with a note: every truth object is missed (MOTA, recall,
 //!   IDF1 and HOTA are 0), which is what TrackEval reports for an empty tracker output.
 
-use anyhow::{Context, Result, bail};
+use crate::error::{Error, Result};
 use tracker_model::{MotRow, TrackSet, read_mot};
 
 /// Rows of a MOTChallenge file and notes for the user (a skipped header).
 pub fn read_rows(text: &str, file: &str) -> Result<(Vec<MotRow>, Vec<String>)> {
-    let parsed = read_mot(text.as_bytes())
-        .with_context(|| format!("{file} is not a valid MOTChallenge file"))?;
+    let parsed = read_mot(text.as_bytes()).map_err(|source| Error::File {
+        file: file.into(),
+        source,
+    })?;
     let notes = parsed
         .header
         .map(|(line, header)| format!("{file}: skipped the header on line {line}: {header}"))
@@ -34,7 +36,7 @@ pub fn parse_rows(text: &str, file: &str) -> Result<Vec<MotRow>> {
 pub fn read_detections(text: &str, file: &str) -> Result<(Vec<MotRow>, Vec<String>)> {
     let (rows, notes) = read_rows(text, file)?;
     if rows.is_empty() {
-        bail!("{file} holds no detections");
+        return Err(Error::NoDetections { what: file.into() });
     }
     Ok((rows, notes))
 }
@@ -75,12 +77,15 @@ pub fn load_evaluation_pair(
         } else {
             format!("only ignore rows (confidence 0; {n_gt_rows} of them)")
         };
-        bail!(
-            "{gt_file} holds {what}: there is no ground truth to score against (every metric \
-             divides by the number of truth objects)"
-        );
+        return Err(Error::NoGroundTruth {
+            file: gt_file.into(),
+            what,
+        });
     }
-    let gt = TrackSet::from_mot_rows(&gt_rows).with_context(|| format!("in {gt_file}"))?;
+    let gt = TrackSet::from_mot_rows(&gt_rows).map_err(|source| Error::Rows {
+        file: gt_file.into(),
+        source,
+    })?;
     let (pred_rows, pred_notes) = read_rows(pred_text, pred_file)?;
     notes.extend(pred_notes);
     if pred_rows.is_empty() {
@@ -89,7 +94,10 @@ pub fn load_evaluation_pair(
              IDF1 and HOTA are 0), as TrackEval scores an empty tracker output"
         ));
     }
-    let pred = TrackSet::from_mot_rows(&pred_rows).with_context(|| format!("in {pred_file}"))?;
+    let pred = TrackSet::from_mot_rows(&pred_rows).map_err(|source| Error::Rows {
+        file: pred_file.into(),
+        source,
+    })?;
     Ok(EvaluationPair { gt, pred, notes })
 }
 

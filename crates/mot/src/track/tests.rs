@@ -27,7 +27,7 @@ fn a_jump_of_four_billion_frames_costs_no_more_than_the_next_frame() {
     // Every tracker steps the frames with detections (and a few empty ones after each),
     // never the four billion empty frames between.
     let rows = rows_with_a_jump();
-    for tracker in Tracker::ALL {
+    for tracker in TrackerKind::ALL {
         let tracks = track_detections(tracker, &rows, &TrackConfig::default(), 1).unwrap();
         let last = tracks
             .tracks()
@@ -41,7 +41,7 @@ fn a_jump_of_four_billion_frames_costs_no_more_than_the_next_frame() {
 
 /// The walkers' detections (the fixture `cargo xtask track` is demonstrated on).
 fn walkers() -> Vec<MotRow> {
-    crate::mot::parse_detections(
+    crate::text::parse_detections(
         include_str!("../../../../fixtures/mot/walkers-dets.txt"),
         "walkers-dets.txt",
     )
@@ -52,7 +52,7 @@ fn config(text: &str) -> TrackConfig {
     toml::from_str(text).unwrap()
 }
 
-fn error_of(text: &str, tracker: Tracker) -> String {
+fn error_of(text: &str, tracker: TrackerKind) -> String {
     let rows = rows_with_a_jump();
     format!(
         "{:#}",
@@ -65,11 +65,11 @@ fn printed_configs_load_back_unchanged() {
     for rows in [walkers(), Vec::new()] {
         for tracker in [
             None,
-            Some(Tracker::Mcmcda),
-            Some(Tracker::McmcdaOnline),
-            Some(Tracker::Gnn),
-            Some(Tracker::GnnOnline),
-            Some(Tracker::Phd),
+            Some(TrackerKind::Mcmcda),
+            Some(TrackerKind::McmcdaOnline),
+            Some(TrackerKind::Gnn),
+            Some(TrackerKind::GnnOnline),
+            Some(TrackerKind::Phd),
         ] {
             // As `--print-config` resolves: for the tracker named, or everything.
             let resolve = |c: &TrackConfig| match tracker {
@@ -122,7 +122,7 @@ fn the_example_configs_load_and_differ_from_nothing_they_do_not_mention() {
         ("gnn", include_str!("../../../../fixtures/configs/gnn.toml")),
         ("phd", include_str!("../../../../fixtures/configs/phd.toml")),
     ] {
-        let tracker: Tracker = name.parse().unwrap();
+        let tracker: TrackerKind = name.parse().unwrap();
         let effective = config(text)
             .resolve(&rows)
             .unwrap_or_else(|e| panic!("{name}: {e:#}"));
@@ -155,14 +155,14 @@ fn matrices_take_rows_and_the_old_flat_form() {
 #[test]
 fn every_table_is_checked_whichever_tracker_runs() {
     // A bad [phd] table with MCMCDA, a bad [model] or [online] with PHD.
-    let err = error_of("[phd]\np_detect = 2.0\n", Tracker::Mcmcda);
+    let err = error_of("[phd]\np_detect = 2.0\n", TrackerKind::Mcmcda);
     assert!(err.contains("[phd]") && err.contains("p_detect"), "{err}");
-    let err = error_of("[model]\nmax_speed = -1.0\n", Tracker::Phd);
+    let err = error_of("[model]\nmax_speed = -1.0\n", TrackerKind::Phd);
     assert!(
         err.contains("[model]") && err.contains("max_speed"),
         "{err}"
     );
-    let err = error_of("[gnn]\nconfirm_hits = 0\n", Tracker::Mcmcda);
+    let err = error_of("[gnn]\nconfirm_hits = 0\n", TrackerKind::Mcmcda);
     assert!(
         err.contains("[gnn]") && err.contains("confirm_hits"),
         "{err}"
@@ -171,9 +171,12 @@ fn every_table_is_checked_whichever_tracker_runs() {
 
 #[test]
 fn zero_samples_are_an_error() {
-    for tracker in Tracker::ALL {
+    for tracker in TrackerKind::ALL {
         let err = error_of("[online]\nsamples_per_scan = 0\n", tracker);
-        assert!(err.contains("samples_per_scan = 0"), "{err}");
+        assert!(
+            err.contains("[online]") && err.contains("samples_per_scan: 0"),
+            "{err}"
+        );
     }
 }
 
@@ -196,14 +199,14 @@ fn offline_chains_share_the_samples_rounded_up() {
     for (text, tracker) in [
         (
             "[offline]\nchains = 64\nsamples_per_detection = 1\nmin_samples = 64\n",
-            Tracker::Mcmcda,
+            TrackerKind::Mcmcda,
         ),
         (
             "[online]\nchains = 64\nsamples_per_scan = 2\n",
-            Tracker::McmcdaOnline,
+            TrackerKind::McmcdaOnline,
         ),
     ] {
-        let table = if tracker == Tracker::Mcmcda {
+        let table = if tracker == TrackerKind::Mcmcda {
             "offline"
         } else {
             "online"
@@ -219,8 +222,8 @@ fn offline_chains_share_the_samples_rounded_up() {
 fn chain_counts_out_of_range_are_errors_naming_the_table() {
     for chains in [0, 65] {
         for (table, tracker) in [
-            ("offline", Tracker::Mcmcda),
-            ("online", Tracker::McmcdaOnline),
+            ("offline", TrackerKind::Mcmcda),
+            ("online", TrackerKind::McmcdaOnline),
         ] {
             let err = error_of(&format!("[{table}]\nchains = {chains}\n"), tracker);
             assert!(
@@ -244,7 +247,7 @@ fn no_track_from_detections_says_why() {
         })
         .to_vec();
     let effective = TrackConfig::default().resolve(&rows).unwrap();
-    for tracker in [Tracker::Mcmcda, Tracker::Gnn] {
+    for tracker in [TrackerKind::Mcmcda, TrackerKind::Gnn] {
         let tracks = track_detections(tracker, &rows, &TrackConfig::default(), 1).unwrap();
         assert!(tracks.is_empty(), "{tracker}");
         let warning = empty_output_warning(tracker, &rows, &effective, &tracks).unwrap();
@@ -254,7 +257,8 @@ fn no_track_from_detections_says_why() {
             "{warning}"
         );
     }
-    let warning = empty_output_warning(Tracker::Phd, &rows, &effective, &TrackSet::new()).unwrap();
+    let warning =
+        empty_output_warning(TrackerKind::Phd, &rows, &effective, &TrackSet::new()).unwrap();
     assert!(warning.contains("extraction_threshold = 0.3"), "{warning}");
 }
 
@@ -275,7 +279,7 @@ fn one_row_at_frame_1_and_one_at_the_last_frame_cost_nothing() {
         det(1, 10.0, 10.0, 40.0, 90.0),
         det(Frame::MAX - 1, 10.0, 10.0, 41.0, 92.0),
     ];
-    for tracker in Tracker::ALL {
+    for tracker in TrackerKind::ALL {
         let tracks = track_detections(tracker, &rows, &TrackConfig::default(), 1).unwrap();
         assert!(tracks.n_points() <= 2, "{tracker}: {}", tracks.n_points());
     }
@@ -308,7 +312,7 @@ fn leaving_walker() -> (Vec<MotRow>, Vec<(Frame, BoundingBox)>) {
 #[test]
 fn output_boxes_follow_the_detections_to_the_track_ends() {
     let (rows, truth) = leaving_walker();
-    for tracker in [Tracker::Mcmcda, Tracker::Gnn] {
+    for tracker in [TrackerKind::Mcmcda, TrackerKind::Gnn] {
         let tracks = track_detections(tracker, &rows, &TrackConfig::default(), 1).unwrap();
         // The leaving walker's track: the one that reaches x > 600.
         let track = tracks
@@ -355,7 +359,7 @@ fn phd_ids_persist_through_a_three_frame_miss() {
         }
         rows.push(det(f, 500.0 - 2.0 * t, 250.0, 42.0, 104.0 - t % 2.0));
     }
-    let tracks = track_detections(Tracker::Phd, &rows, &TrackConfig::default(), 3).unwrap();
+    let tracks = track_detections(TrackerKind::Phd, &rows, &TrackConfig::default(), 3).unwrap();
     let a: Vec<&Track> = tracks
         .tracks()
         .iter()
@@ -427,11 +431,11 @@ fn the_score_densities_are_fitted_from_tracks_and_clutter() {
     // Only the trackers with a score term fit it; the PHD's resolution skips it and otherwise
     // equals the full one.
     let for_gnn = TrackConfig::default()
-        .resolve_for(&rows, Tracker::Gnn)
+        .resolve_for(&rows, TrackerKind::Gnn)
         .unwrap();
     assert_eq!(for_gnn.score_model.as_ref(), Some(m));
     let for_phd = TrackConfig::default()
-        .resolve_for(&rows, Tracker::Phd)
+        .resolve_for(&rows, TrackerKind::Phd)
         .unwrap();
     assert!(for_phd.score_model.is_none());
     assert_eq!(for_phd.phd, effective.phd);
@@ -455,7 +459,7 @@ fn the_score_densities_are_fitted_from_tracks_and_clutter() {
             .score_model
             .is_none()
     );
-    let err = error_of("[scores]\nmax_log_ratio = -1.0\n", Tracker::Gnn);
+    let err = error_of("[scores]\nmax_log_ratio = -1.0\n", TrackerKind::Gnn);
     assert!(
         err.contains("[scores]") && err.contains("max_log_ratio"),
         "{err}"
@@ -464,7 +468,7 @@ fn the_score_densities_are_fitted_from_tracks_and_clutter() {
 
 #[test]
 fn a_high_score_isolated_pair_is_a_track_and_a_low_score_one_is_not() {
-    let pair_track = |rows: &[MotRow], settings: &TrackConfig, tracker: Tracker| {
+    let pair_track = |rows: &[MotRow], settings: &TrackConfig, tracker: TrackerKind| {
         track_detections(tracker, rows, settings, 1)
             .unwrap()
             .tracks()
@@ -474,7 +478,7 @@ fn a_high_score_isolated_pair_is_a_track_and_a_low_score_one_is_not() {
     // MCMCDA weighs both detections' scores against clutter (GNN's cost holds only the
     // second's: a pair 4 px apart links on its kinematics; the mcmcda crate's tests check
     // GNN's score-shifted boundary by hand).
-    for tracker in [Tracker::Mcmcda, Tracker::McmcdaOnline] {
+    for tracker in [TrackerKind::Mcmcda, TrackerKind::McmcdaOnline] {
         let default = TrackConfig::default();
         assert!(
             pair_track(&scored_file(0.9), &default, tracker),
@@ -495,7 +499,7 @@ fn a_high_score_isolated_pair_is_a_track_and_a_low_score_one_is_not() {
 fn gnn_drops_the_detections_its_scores_call_clutter_and_refits() {
     let rows = scored_file(0.25);
     let all = TrackConfig::default()
-        .resolve_for(&rows, Tracker::Gnn)
+        .resolve_for(&rows, TrackerKind::Gnn)
         .unwrap();
     let m = all.score_model.as_ref().expect("scores vary: a model");
     // By hand from the fitted ratio: the rows below the default threshold (−2), then the
@@ -513,14 +517,14 @@ fn gnn_drops_the_detections_its_scores_call_clutter_and_refits() {
         rows.len()
     );
     let refitted = TrackConfig::default()
-        .resolve_for(&kept, Tracker::Gnn)
+        .resolve_for(&kept, TrackerKind::Gnn)
         .unwrap();
     let pair_track = |set: &TrackSet| {
         set.tracks()
             .iter()
             .any(|t| t.points().iter().any(|p| p.location.position().x > 1400.0))
     };
-    for tracker in [Tracker::Gnn, Tracker::GnnOnline] {
+    for tracker in [TrackerKind::Gnn, TrackerKind::GnnOnline] {
         let (set, effective) =
             track_detections_with_frames(tracker, &rows, &TrackConfig::default(), 1, None).unwrap();
         assert_eq!(effective.gnn_dropped, dropped, "{tracker}");
@@ -539,7 +543,11 @@ fn gnn_drops_the_detections_its_scores_call_clutter_and_refits() {
     }
     // MCMCDA weighs the scores instead, and the PHD has none: both run on every detection
     // with the model fitted to all of them.
-    for tracker in [Tracker::Mcmcda, Tracker::McmcdaOnline, Tracker::Phd] {
+    for tracker in [
+        TrackerKind::Mcmcda,
+        TrackerKind::McmcdaOnline,
+        TrackerKind::Phd,
+    ] {
         let (_, effective) =
             track_detections_with_frames(tracker, &rows, &TrackConfig::default(), 1, None).unwrap();
         assert_eq!(effective.gnn_dropped, 0);
@@ -550,13 +558,13 @@ fn gnn_drops_the_detections_its_scores_call_clutter_and_refits() {
     for bad in ["nan", "inf", "3.5"] {
         let err = error_of(
             &format!("[scores]\ngnn_min_log_ratio = {bad}\n"),
-            Tracker::Gnn,
+            TrackerKind::Gnn,
         );
         assert!(err.contains("gnn_min_log_ratio"), "{err}");
     }
     // With the bound at 50 the file's ratios stay far below it (the densities have a floor).
     let err = track_detections(
-        Tracker::Gnn,
+        TrackerKind::Gnn,
         &rows,
         &config("[scores]\nmax_log_ratio = 50.0\ngnn_min_log_ratio = 49.0\n"),
         1,
@@ -584,7 +592,7 @@ fn offline_mcmcda_links_a_walker_across_an_occlusion_longer_than_its_max_gap() {
         }
     }
     let ids_of = |settings: &TrackConfig, y: f64| {
-        let tracks = track_detections(Tracker::Mcmcda, &rows, settings, 1).unwrap();
+        let tracks = track_detections(TrackerKind::Mcmcda, &rows, settings, 1).unwrap();
         tracks
             .tracks()
             .iter()
@@ -621,7 +629,7 @@ fn online_gnn_output_is_causal_and_coasts_a_bounded_time() {
         rows.push(det(f, 600.0, 100.0 + 3.0 * t, 40.0, 100.0));
     }
     let settings = config("[gnn]\nmax_gap = 6\n[boxes]\nonline_coast_frames = 8\n");
-    let tracks = track_detections(Tracker::GnnOnline, &rows, &settings, 1).unwrap();
+    let tracks = track_detections(TrackerKind::GnnOnline, &rows, &settings, 1).unwrap();
     let walker = tracks
         .tracks()
         .iter()
@@ -647,7 +655,7 @@ fn online_gnn_output_is_causal_and_coasts_a_bounded_time() {
     }
     // With the default 3 coasted frames: the two-frame miss is bridged, the end coasts 3.
     let short = track_detections(
-        Tracker::GnnOnline,
+        TrackerKind::GnnOnline,
         &rows,
         &config("[gnn]\nmax_gap = 6\n"),
         1,
@@ -662,7 +670,7 @@ fn online_gnn_output_is_causal_and_coasts_a_bounded_time() {
     assert_eq!(frames, (1..=23).collect::<Vec<_>>());
     // Causal: the output up to frame 15 is the same when the file ends at frame 15.
     let cut: Vec<MotRow> = rows.iter().filter(|r| r.frame <= 15).copied().collect();
-    let early = track_detections(Tracker::GnnOnline, &cut, &settings, 1).unwrap();
+    let early = track_detections(TrackerKind::GnnOnline, &cut, &settings, 1).unwrap();
     let early_walker = early
         .tracks()
         .iter()
@@ -754,7 +762,7 @@ fn phd_tracks_coast_through_empty_frames_in_closed_form() {
     // prediction. (The slow walker's track, whose estimates took a label holding 7 % of
     // their mass, may end at the gap, as stepping the empty frames would.)
     let rows = walker_with_a_gap(13..=16);
-    let tracks = track_detections(Tracker::Phd, &rows, &TrackConfig::default(), 3).unwrap();
+    let tracks = track_detections(TrackerKind::Phd, &rows, &TrackConfig::default(), 3).unwrap();
     let truth = |f: Frame| {
         let t = f64::from(f);
         BoundingBox::new(100.0 + 3.0 * t, 100.0 + t, 41.0, 100.0).unwrap()
@@ -783,7 +791,7 @@ fn phd_tracks_coast_through_empty_frames_in_closed_form() {
     // on both sides.
     let rows = walker_with_a_gap(11..=20);
     let short = config("[phd_labels]\nmax_misses = 8\n");
-    let tracks = track_detections(Tracker::Phd, &rows, &short, 3).unwrap();
+    let tracks = track_detections(TrackerKind::Phd, &rows, &short, 3).unwrap();
     assert!(tracks.len() >= 2);
     for t in tracks.tracks() {
         let frames: Vec<Frame> = t.points().iter().map(|p| p.frame).collect();
@@ -793,20 +801,20 @@ fn phd_tracks_coast_through_empty_frames_in_closed_form() {
 
 #[test]
 fn coasting_is_bounded_by_the_configuration() {
-    let err = error_of("[phd_labels]\nmax_misses = 4000000000\n", Tracker::Phd);
+    let err = error_of("[phd_labels]\nmax_misses = 4000000000\n", TrackerKind::Phd);
     assert!(
         err.contains("[phd_labels]") && err.contains("max_misses"),
         "{err}"
     );
-    let err = error_of("[phd_labels]\nmin_iou = nan\n", Tracker::Mcmcda);
+    let err = error_of("[phd_labels]\nmin_iou = nan\n", TrackerKind::Mcmcda);
     assert!(err.contains("min_iou"), "{err}");
-    let err = error_of("[offline]\nlink_gap_factor = 1e9\n", Tracker::Mcmcda);
+    let err = error_of("[offline]\nlink_gap_factor = 1e9\n", TrackerKind::Mcmcda);
     assert!(
         err.contains("[offline]") && err.contains("link_gap_factor"),
         "{err}"
     );
     for key in ["extrapolate_frames", "online_coast_frames"] {
-        let err = error_of(&format!("[boxes]\n{key} = 4000000000\n"), Tracker::Gnn);
+        let err = error_of(&format!("[boxes]\n{key} = 4000000000\n"), TrackerKind::Gnn);
         assert!(err.contains("[boxes]") && err.contains(key), "{err}");
     }
     // The most coasting allowed, over a gap of four billion frames: at most that many
@@ -815,7 +823,7 @@ fn coasting_is_bounded_by_the_configuration() {
         .map(|f| det(f, 10.0 + f64::from(f % 7), 10.0, 40.0, 90.0));
     let start = std::time::Instant::now();
     let tracks = track_detections(
-        Tracker::Phd,
+        TrackerKind::Phd,
         &rows,
         &config("[phd_labels]\nmax_misses = 10000\n"),
         1,
@@ -829,7 +837,7 @@ fn coasting_is_bounded_by_the_configuration() {
     let rows = walker_with_a_gap(11..=20);
     let coasted = |max_misses: u32| {
         let text = format!("[phd_labels]\nmax_misses = {max_misses}\nmin_mass = 0.0\n");
-        let tracks = track_detections(Tracker::Phd, &rows, &config(&text), 3).unwrap();
+        let tracks = track_detections(TrackerKind::Phd, &rows, &config(&text), 3).unwrap();
         tracks
             .tracks()
             .iter()

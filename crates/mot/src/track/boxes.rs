@@ -97,7 +97,7 @@ pub fn smooth_boxes(
         };
         let (w, h) = ((e4[2] - e4[0]).max(1.0), (e4[3] - e4[1]).max(1.0));
         // f is within [0, Frame::MAX] by construction.
-        let frame = Frame::try_from(f).context("an output frame beyond u32")?;
+        let frame = crate::error::frame_of(f)?;
         out.push(TrackPoint::boxed(
             frame,
             BoundingBox::new(e4[0], e4[1], w, h)?,

@@ -81,7 +81,9 @@ pub(super) fn track_boxes_phd(
         by_frame.entry(r.frame).or_default().push(r.bbox);
     }
     if by_frame.is_empty() {
-        bail!("no detections");
+        return Err(crate::error::Error::NoDetections {
+            what: "the input".into(),
+        });
     }
     // Only frames with detections are stepped. A frame number with no row is a frame in
     // which the detector found nothing (a MOTChallenge file has no way to say "no detector
@@ -351,17 +353,26 @@ impl PhdLabelConfig {
     /// Checks every field.
     pub fn check(&self) -> Result<()> {
         if !(0.0..=1.0).contains(&self.min_iou) {
-            bail!("min_iou = {} must be in [0, 1]", self.min_iou);
+            return Err(crate::error::invalid(
+                "min_iou",
+                format!("{} must be in [0, 1]", self.min_iou),
+            ));
         }
         if !(self.min_mass.is_finite() && self.min_mass >= 0.0) {
-            bail!("min_mass = {} must be finite and ≥ 0", self.min_mass);
+            return Err(crate::error::invalid(
+                "min_mass",
+                format!("{} must be finite and ≥ 0", self.min_mass),
+            ));
         }
         if self.max_misses > MAX_COAST_FRAMES {
-            bail!(
-                "max_misses = {} is over {MAX_COAST_FRAMES}: a track coasts at most that many \
-                 frames, so that a gap in the frame numbers costs a bounded number of boxes",
-                self.max_misses
-            );
+            return Err(crate::error::invalid(
+                "max_misses",
+                format!(
+                    "{} is over {MAX_COAST_FRAMES}: a track coasts at most that many frames, so \
+                     that a gap in the frame numbers costs a bounded number of boxes",
+                    self.max_misses
+                ),
+            ));
         }
         Ok(())
     }
@@ -428,7 +439,7 @@ mod tests {
             }
             rows.push(row(f, 700.0 - 2.0 * t, 400.0));
         }
-        let tracks = track_detections(Tracker::Phd, &rows, &TrackConfig::default(), 3).unwrap();
+        let tracks = track_detections(TrackerKind::Phd, &rows, &TrackConfig::default(), 3).unwrap();
         let a: Vec<&Track> = tracks
             .tracks()
             .iter()

@@ -4,7 +4,7 @@ use super::*;
 
 /// MCMCDA (offline or online) or GNN on the box centres; boxes from [`smooth_boxes`].
 pub(super) fn track_points(
-    tracker: Tracker,
+    tracker: TrackerKind,
     rows: &[MotRow],
     settings: &EffectiveConfig,
     seed: u64,
@@ -13,10 +13,10 @@ pub(super) fn track_points(
     let scores = settings.score_model.as_ref();
     let (detections, associations): (_, Vec<Vec<MeasId>>) = match tracker {
         // The online tracker builds its own problem, scan by scan.
-        Tracker::McmcdaOnline => {
+        TrackerKind::McmcdaOnline => {
             return track_online(&model, &detections_by_frame(rows).1, settings, seed);
         }
-        Tracker::Mcmcda => {
+        TrackerKind::Mcmcda => {
             let (detections, _, problem) = problem_of(&model, rows, scores, Problem::empty)?;
             // The chain starts from GNN's tracks (feasible in Ω by construction), so the MAP
             // is at least as probable as GNN's answer under the fitted model.
@@ -34,14 +34,14 @@ pub(super) fn track_points(
             let linked = link_tracklets(map.tracks, &detections, model.config(), max_gap);
             (detections, linked)
         }
-        Tracker::Gnn | Tracker::Phd => {
+        TrackerKind::Gnn | TrackerKind::Phd => {
             let (detections, _, problem) =
                 problem_of(&model, rows, scores, Problem::without_neighbourhoods)?;
             let window = problem.all_scans()?;
             let tracks = nearest_neighbour_tracks(&model, &problem, window, &settings.gnn)?;
             (detections, tracks)
         }
-        Tracker::GnnOnline => {
+        TrackerKind::GnnOnline => {
             let (detections, by_frame, problem) =
                 problem_of(&model, rows, scores, Problem::without_neighbourhoods)?;
             let window = problem.all_scans()?;
@@ -243,7 +243,7 @@ fn gnn_online_output(
                 let dt = (g - u64::from(f)) as f64;
                 let c = b.centre() + velocity * dt;
                 // g ≤ end, a Frame.
-                let frame = Frame::try_from(g).context("a coasted frame beyond u32")?;
+                let frame = crate::error::frame_of(g)?;
                 points.push(TrackPoint::boxed(
                     frame,
                     BoundingBox::from_centre(c, b.width, b.height)?,

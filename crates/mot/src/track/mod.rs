@@ -23,7 +23,7 @@ use std::borrow::Cow;
 use std::fmt;
 use std::str::FromStr;
 
-use anyhow::{Context, Result, bail};
+use crate::error::{Error, InTable, Result, invalid};
 use mcmcda::{
     McmcdaConfig, MeasId, NearestNeighbourConfig, OnlineConfig, OnlineTracker, Partition, Problem,
     TrackInit, nearest_neighbour_tracks, run_chains,
@@ -51,7 +51,7 @@ pub use phd::PhdLabelConfig;
 /// Which tracker runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Tracker {
+pub enum TrackerKind {
     /// Offline (batch) MCMCDA over the whole file.
     Mcmcda,
     /// Online sliding-window MCMCDA, output frame by frame.
@@ -67,44 +67,42 @@ pub enum Tracker {
     Phd,
 }
 
-impl Tracker {
+impl TrackerKind {
     /// Every tracker, in the order the command line lists them.
-    pub const ALL: [Tracker; 5] = [
-        Tracker::Mcmcda,
-        Tracker::McmcdaOnline,
-        Tracker::Gnn,
-        Tracker::GnnOnline,
-        Tracker::Phd,
+    pub const ALL: [TrackerKind; 5] = [
+        TrackerKind::Mcmcda,
+        TrackerKind::McmcdaOnline,
+        TrackerKind::Gnn,
+        TrackerKind::GnnOnline,
+        TrackerKind::Phd,
     ];
 
     /// The name on the command line and in files.
     pub fn name(self) -> &'static str {
         match self {
-            Tracker::Mcmcda => "mcmcda",
-            Tracker::McmcdaOnline => "mcmcda-online",
-            Tracker::Gnn => "gnn",
-            Tracker::GnnOnline => "gnn-online",
-            Tracker::Phd => "phd",
+            TrackerKind::Mcmcda => "mcmcda",
+            TrackerKind::McmcdaOnline => "mcmcda-online",
+            TrackerKind::Gnn => "gnn",
+            TrackerKind::GnnOnline => "gnn-online",
+            TrackerKind::Phd => "phd",
         }
     }
 }
 
-impl fmt::Display for Tracker {
+impl fmt::Display for TrackerKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())
     }
 }
 
-impl FromStr for Tracker {
-    type Err = anyhow::Error;
+impl FromStr for TrackerKind {
+    type Err = Error;
 
     fn from_str(s: &str) -> Result<Self> {
-        Tracker::ALL
+        TrackerKind::ALL
             .into_iter()
             .find(|t| t.name() == s)
-            .with_context(|| {
-                format!("unknown tracker {s:?}; known: mcmcda, mcmcda-online, gnn, gnn-online, phd")
-            })
+            .ok_or_else(|| Error::UnknownTracker { name: s.into() })
     }
 }
 
@@ -219,19 +217,16 @@ impl Default for ScoreConfig {
 impl ScoreConfig {
     /// Checks the bound (finite, ≥ 0) and GNN's threshold (at most the bound, −∞ allowed).
     pub fn check(&self) -> Result<()> {
-        if !(self.max_log_ratio.is_finite() && self.max_log_ratio >= 0.0) {
-            bail!(
-                "max_log_ratio = {}; it must be finite and ≥ 0",
-                self.max_log_ratio
-            );
-        }
+        tracker_model::ensure_non_negative(self.max_log_ratio, "max_log_ratio")?;
         if self.gnn_min_log_ratio.is_nan() || self.gnn_min_log_ratio > self.max_log_ratio {
-            bail!(
-                "gnn_min_log_ratio = {}; it must be at most max_log_ratio = {} (every clamped \
-                 ratio would be below it; -inf keeps every detection)",
-                self.gnn_min_log_ratio,
-                self.max_log_ratio
-            );
+            return Err(invalid(
+                "gnn_min_log_ratio",
+                format!(
+                    "{} must be at most max_log_ratio = {} (every clamped ratio would be below \
+                     it; -inf keeps every detection)",
+                    self.gnn_min_log_ratio, self.max_log_ratio
+                ),
+            ));
         }
         Ok(())
     }
@@ -329,7 +324,7 @@ impl ScoreModel {
 /// The optional configuration (TOML): any of the tables, each field optional. Fields of
 /// `[model]` and `[phd]` override the configurations scaled and fitted to the detections.
 /// Every table present is checked, whichever tracker runs ([`TrackConfig::resolve`]).
-#[derive(Debug, Default, Deserialize)]
+#[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrackConfig {
     model: Option<toml::Table>,
@@ -399,8 +394,8 @@ impl TrackConfig {
     /// their own) are fitted only for the trackers whose likelihood has a score term, so not
     /// for the PHD (its `score_model` stays `None`, as `--print-config` shows no `[scores]`
     /// table for it).
-    pub fn resolve_for(&self, rows: &[MotRow], tracker: Tracker) -> Result<EffectiveConfig> {
-        self.resolve_scores(rows, tracker != Tracker::Phd)
+    pub fn resolve_for(&self, rows: &[MotRow], tracker: TrackerKind) -> Result<EffectiveConfig> {
+        self.resolve_scores(rows, tracker != TrackerKind::Phd)
     }
 
     /// The configuration `tracker` runs with on `rows`, and the detections it tracks: GNN and
@@ -411,13 +406,13 @@ impl TrackConfig {
     pub fn resolve_tracked<'a>(
         &self,
         rows: &'a [MotRow],
-        tracker: Tracker,
+        tracker: TrackerKind,
     ) -> Result<(EffectiveConfig, Cow<'a, [MotRow]>)> {
         let config = self.resolve_for(rows, tracker)?;
         let Some(scores) = config.score_model.as_ref() else {
             return Ok((config, Cow::Borrowed(rows)));
         };
-        if !matches!(tracker, Tracker::Gnn | Tracker::GnnOnline) {
+        if !matches!(tracker, TrackerKind::Gnn | TrackerKind::GnnOnline) {
             return Ok((config, Cow::Borrowed(rows)));
         }
         let min = config.scores.gnn_min_log_ratio;
@@ -431,10 +426,7 @@ impl TrackConfig {
                 .iter()
                 .map(|r| scores.log_ratio(r.confidence))
                 .fold(f64::NEG_INFINITY, f64::max);
-            bail!(
-                "in the [scores] table of the configuration: gnn_min_log_ratio = {min} drops \
-                 every detection (the file's fitted ln f₁/f₀ reaches at most {best:.3})"
-            );
+            return Err(Error::DropsEveryDetection { min, best });
         }
         if kept.len() == rows.len() {
             return Ok((config, Cow::Borrowed(rows)));
@@ -455,21 +447,18 @@ impl TrackConfig {
             )
         };
         if self.fit.min_track_detections < 3 {
-            bail!(
-                "in the [fit] table of the configuration: min_track_detections = {}; the \
-                 moment estimates need at least 3",
-                self.fit.min_track_detections
-            );
+            return Err(invalid(
+                "min_track_detections",
+                format!(
+                    "{}; the moment estimates need at least 3",
+                    self.fit.min_track_detections
+                ),
+            ))
+            .in_table("fit");
         }
-        self.offline
-            .check()
-            .context("in the [offline] table of the configuration")?;
-        self.boxes
-            .check()
-            .context("in the [boxes] table of the configuration")?;
-        self.scores
-            .check()
-            .context("in the [scores] table of the configuration")?;
+        self.offline.check().in_table("offline")?;
+        self.boxes.check().in_table("boxes")?;
+        self.scores.check().in_table("scores")?;
         let model_base = if boxes.is_empty() {
             model_base
         } else {
@@ -515,28 +504,20 @@ impl TrackConfig {
             }
         }
         let model = overridden(&model_base, self.model.as_ref(), "model")?;
-        model
-            .check()
-            .context("in the [model] table of the configuration")?;
+        model.check().in_table("model")?;
         let online = overridden(&online_base(), self.online.as_ref(), "online")?;
-        online
-            .check()
-            .context("in the [online] table of the configuration")?;
+        online.check().in_table("online")?;
         if online.samples_per_scan == 0 {
-            bail!(
-                "in the [online] table of the configuration: samples_per_scan = 0; MCMCDA \
-                 needs at least 1 sample per scan to find any track"
-            );
+            return Err(invalid(
+                "samples_per_scan",
+                "0; MCMCDA needs at least 1 sample per scan to find any track".into(),
+            ))
+            .in_table("online");
         }
-        self.gnn
-            .check()
-            .context("in the [gnn] table of the configuration")?;
+        self.gnn.check().in_table("gnn")?;
         let phd = overridden(&phd_base, self.phd.as_ref(), "phd")?;
-        phd.check()
-            .context("in the [phd] table of the configuration")?;
-        self.phd_labels
-            .check()
-            .context("in the [phd_labels] table of the configuration")?;
+        phd.check().in_table("phd")?;
+        self.phd_labels.check().in_table("phd_labels")?;
         let mut gnn = self.gnn;
         if gnn.max_gap.is_none() && self.fit.iterations > 0 && !boxes.is_empty() {
             // GNN deletes after one box width of travel, half of MCMCDA's d̄ (the fitted one,
@@ -567,53 +548,79 @@ impl TrackConfig {
 /// Tracks `rows` and returns boxed tracks with ids from 1. The configuration is resolved and
 /// checked first, every table of it.
 pub fn track_detections(
-    tracker: Tracker,
+    tracker: TrackerKind,
     rows: &[MotRow],
     settings: &TrackConfig,
     seed: u64,
 ) -> Result<TrackSet> {
     if rows.is_empty() {
-        bail!("no detections");
+        return Err(Error::NoDetections {
+            what: "the input".into(),
+        });
     }
     let (config, rows) = settings.resolve_tracked(rows, tracker)?;
     match tracker {
-        Tracker::Phd => track_boxes_phd(&rows, &config, seed),
-        Tracker::Mcmcda | Tracker::McmcdaOnline | Tracker::Gnn | Tracker::GnnOnline => {
-            track_points(tracker, &rows, &config, seed)
-        }
+        TrackerKind::Phd => track_boxes_phd(&rows, &config, seed),
+        TrackerKind::Mcmcda
+        | TrackerKind::McmcdaOnline
+        | TrackerKind::Gnn
+        | TrackerKind::GnnOnline => track_points(tracker, &rows, &config, seed),
+    }
+}
+
+/// A detection-file tracker behind tracker-model's [`BatchTracker`]: [`track_detections`] on
+/// the scans' boxes (their scores as the confidence column), its configuration fitted to them.
+#[derive(Debug, Clone)]
+pub struct FileTracker {
+    /// Which tracker.
+    pub kind: TrackerKind,
+    /// The configuration file's tables.
+    pub config: TrackConfig,
+    /// The seed of every random draw.
+    pub seed: u64,
+}
+
+impl tracker_model::BatchTracker for FileTracker {
+    type Error = Error;
+
+    fn track(&mut self, scans: &[tracker_model::FrameDetections]) -> Result<TrackSet> {
+        let rows = crate::driver::rows_of(scans)?;
+        track_detections(self.kind, &rows, &self.config, self.seed)
     }
 }
 
 /// [`track_detections`], or, given a folder of `frames`, the PHD tracker fused with image local
-/// detectors on those pictures ([`crate::track_frames`]; `--tracker phd` only). Also returns
+/// detectors on those pictures ([`crate::frames`]; `--tracker phd` only). Also returns
 /// the configuration the tracker ran with, resolved once: resolving fits the model to the file,
 /// which costs as much as a GNN pass, so the caller must not resolve it again to report it.
 pub fn track_detections_with_frames(
-    tracker: Tracker,
+    tracker: TrackerKind,
     rows: &[MotRow],
     settings: &TrackConfig,
     seed: u64,
     frames: Option<&std::path::Path>,
 ) -> Result<(TrackSet, EffectiveConfig)> {
-    if frames.is_some() && tracker != Tracker::Phd {
-        bail!("--frames runs the fused PHD tracker: use it with --tracker phd");
+    if frames.is_some() && tracker != TrackerKind::Phd {
+        return Err(Error::FramesNeedPhd {
+            tracker: tracker.name(),
+        });
     }
     if rows.is_empty() {
-        bail!("no detections");
+        return Err(Error::NoDetections {
+            what: "the input".into(),
+        });
     }
-    let fused = crate::track_frames::FusedSettings::default();
+    let fused = crate::frames::FusedSettings::default();
     let (config, rows) = match frames {
         Some(_) => (
-            crate::track_frames::fused_config(settings, rows, &fused)?,
+            crate::frames::fused_config(settings, rows, &fused)?,
             Cow::Borrowed(rows),
         ),
         None => settings.resolve_tracked(rows, tracker)?,
     };
     let tracks = match (frames, tracker) {
-        (Some(dir), _) => {
-            crate::track_frames::track_frames_resolved(dir, &rows, &config, &fused, seed)?
-        }
-        (None, Tracker::Phd) => track_boxes_phd(&rows, &config, seed)?,
+        (Some(dir), _) => crate::frames::track_frames_resolved(dir, &rows, &config, &fused, seed)?,
+        (None, TrackerKind::Phd) => track_boxes_phd(&rows, &config, seed)?,
         (None, _) => track_points(tracker, &rows, &config, seed)?,
     };
     Ok((tracks, config))
@@ -622,7 +629,7 @@ pub fn track_detections_with_frames(
 /// Why a tracker that was given detections returned no track, or nothing when it returned
 /// some: a warning for the user that names the parameters that decide it.
 pub fn empty_output_warning(
-    tracker: Tracker,
+    tracker: TrackerKind,
     rows: &[MotRow],
     config: &EffectiveConfig,
     tracks: &TrackSet,
@@ -638,13 +645,16 @@ pub fn empty_output_warning(
     );
     let m = &config.model;
     let why = match tracker {
-        Tracker::Mcmcda | Tracker::McmcdaOnline | Tracker::Gnn | Tracker::GnnOnline => format!(
+        TrackerKind::Mcmcda
+        | TrackerKind::McmcdaOnline
+        | TrackerKind::Gnn
+        | TrackerKind::GnnOnline => format!(
             "a track needs detections in at least two frames at most max_gap = {} frames \
              apart, moving at most max_speed = {} per frame, and it must explain them better \
              than clutter_per_scan = {} false alarms per frame over volume = {}",
             m.max_gap, m.max_speed, m.clutter_per_scan, m.volume
         ),
-        Tracker::Phd => format!(
+        TrackerKind::Phd => format!(
             "a track is reported where the filter's weight passes extraction_threshold = {} \
              with p_detect = {}, birth_rate = {} and clutter_rate = {} per frame",
             config.phd.extraction_threshold,
@@ -907,12 +917,12 @@ const KEY_COMMENTS: [(&str, &[(&str, &str)]); 9] = [
 ];
 
 /// The tables a tracker reads.
-fn tables_of(tracker: Tracker) -> &'static [&'static str] {
+fn tables_of(tracker: TrackerKind) -> &'static [&'static str] {
     match tracker {
-        Tracker::Mcmcda => &["model", "fit", "offline", "boxes", "scores"],
-        Tracker::McmcdaOnline => &["model", "fit", "online", "boxes", "scores"],
-        Tracker::Gnn | Tracker::GnnOnline => &["model", "fit", "gnn", "boxes", "scores"],
-        Tracker::Phd => &["fit", "phd", "phd_labels"],
+        TrackerKind::Mcmcda => &["model", "fit", "offline", "boxes", "scores"],
+        TrackerKind::McmcdaOnline => &["model", "fit", "online", "boxes", "scores"],
+        TrackerKind::Gnn | TrackerKind::GnnOnline => &["model", "fit", "gnn", "boxes", "scores"],
+        TrackerKind::Phd => &["fit", "phd", "phd_labels"],
     }
 }
 
@@ -920,7 +930,7 @@ fn tables_of(tracker: Tracker) -> &'static [&'static str] {
 /// (all of them without one) with its value and a one-line comment. Loading the text back as a
 /// [`TrackConfig`] gives the same effective configuration. Unset optional keys are written
 /// as comments.
-pub fn render_config(config: &EffectiveConfig, tracker: Option<Tracker>) -> Result<String> {
+pub fn render_config(config: &EffectiveConfig, tracker: Option<TrackerKind>) -> Result<String> {
     let all = toml::Table::try_from(config)?;
     let mut out = String::from(
         "# Effective configuration of `cargo xtask track` (load it with --config FILE).\n\
@@ -934,9 +944,12 @@ pub fn render_config(config: &EffectiveConfig, tracker: Option<Tracker>) -> Resu
         let table = all
             .get(name)
             .and_then(toml::Value::as_table)
-            .with_context(|| format!("the configuration has no [{name}] table"))?;
+            .ok_or_else(|| invalid("configuration", format!("it has no [{name}] table")))?;
         if let Some(key) = table.keys().find(|k| !keys.iter().any(|(c, _)| c == k)) {
-            bail!("[{name}] {key} has no comment in KEY_COMMENTS");
+            return Err(invalid(
+                "configuration",
+                format!("[{name}] {key} has no comment in KEY_COMMENTS"),
+            ));
         }
         out.push_str(&format!("\n[{name}]\n"));
         for (key, comment) in keys {
@@ -953,18 +966,24 @@ impl OfflineConfig {
     /// Checks that the chain runs at all.
     pub fn check(&self) -> Result<()> {
         if self.min_samples == 0 && self.samples_per_detection == 0 {
-            bail!("min_samples = samples_per_detection = 0: the chain would never move");
+            return Err(invalid(
+                "min_samples",
+                "min_samples = samples_per_detection = 0: the chain would never move".into(),
+            ));
         }
         if !(1..=64).contains(&self.chains) {
-            bail!("chains = {}; it must be in 1..=64", self.chains);
+            return Err(invalid(
+                "chains",
+                format!("{}; it must be in 1..=64", self.chains),
+            ));
         }
         // At most 100 × d̄ (d̄ ≤ 64 frames): a link's bridged frames are output boxes, so the
         // factor bounds what one gap in the frame numbers can cost.
         if !(self.link_gap_factor.is_finite() && (0.0..=100.0).contains(&self.link_gap_factor)) {
-            bail!(
-                "link_gap_factor = {}; it must be in [0, 100]",
-                self.link_gap_factor
-            );
+            return Err(invalid(
+                "link_gap_factor",
+                format!("{}; it must be in [0, 100]", self.link_gap_factor),
+            ));
         }
         Ok(())
     }
@@ -986,20 +1005,22 @@ impl BoxConfig {
     /// a configuration ask for billions of boxes).
     pub fn check(&self) -> Result<()> {
         if !(self.smoothing_frames.is_finite() && self.smoothing_frames > 0.0) {
-            bail!(
-                "smoothing_frames = {}; it must be finite and > 0",
-                self.smoothing_frames
-            );
+            return Err(invalid(
+                "smoothing_frames",
+                format!("{}; it must be finite and > 0", self.smoothing_frames),
+            ));
         }
         for (name, frames) in [
             ("extrapolate_frames", self.extrapolate_frames),
             ("online_coast_frames", self.online_coast_frames),
         ] {
             if frames > MAX_COAST_FRAMES {
-                bail!(
-                    "{name} = {frames} is over {MAX_COAST_FRAMES}: each frame is one output box \
-                     per track"
-                );
+                return Err(invalid(
+                    name,
+                    format!(
+                        "{frames} is over {MAX_COAST_FRAMES}: each frame is one output box per track"
+                    ),
+                ));
             }
         }
         Ok(())
@@ -1014,16 +1035,17 @@ fn boxes(rows: &[MotRow]) -> Vec<BoundingBox> {
 fn overridden<T: Clone + serde::Serialize + serde::de::DeserializeOwned>(
     base: &T,
     overrides: Option<&toml::Table>,
-    what: &str,
+    what: &'static str,
 ) -> Result<T> {
     let Some(overrides) = overrides else {
         return Ok(base.clone());
     };
     let mut table = toml::Table::try_from(base)?;
     table.extend(overrides.clone());
-    table
-        .try_into()
-        .with_context(|| format!("in the [{what}] table of the configuration"))
+    table.try_into().map_err(|source| Error::TableSyntax {
+        table: what,
+        source,
+    })
 }
 
 #[cfg(test)]

@@ -1,0 +1,60 @@
+//! The one generic driver: any tracker of tracker-model's interface on detections from a
+//! file or a stream. Online trackers run as batch ones through [`tracker_model::Online`].
+
+use tracker_model::{
+    BatchTracker, Detection, FrameClock, FrameDetections, MotRow, TrackSet, scans_of,
+};
+
+use crate::error::{Error, Result};
+
+/// The rows of a MOTChallenge file as detections: row i (0-based, in file order) is detection
+/// i + 1, with its frame, its box and its confidence as the score.
+pub fn detections_of(rows: &[MotRow]) -> Vec<Detection> {
+    rows.iter()
+        .enumerate()
+        .map(|(i, r)| Detection::boxed(i as u64 + 1, r.frame, r.bbox).with_score(r.confidence))
+        .collect()
+}
+
+/// Box detections back as MOTChallenge rows, frame by frame (id −1; a detection without a
+/// score gets confidence 1); a point detection is an error.
+pub fn rows_of(scans: &[FrameDetections]) -> Result<Vec<MotRow>> {
+    let mut rows = Vec::with_capacity(scans.iter().map(|s| s.detections.len()).sum());
+    for scan in scans {
+        for d in &scan.detections {
+            let bbox = d.bbox().ok_or_else(|| {
+                crate::error::invalid(
+                    "detection",
+                    format!(
+                        "detection {} is a point; a detection file holds boxes",
+                        d.id.0
+                    ),
+                )
+            })?;
+            rows.push(MotRow {
+                frame: scan.frame,
+                id: -1,
+                bbox,
+                confidence: d.score.unwrap_or(1.0),
+                world: [-1.0; 3],
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// Runs any tracker on `detections` (stamped in frames, or in seconds with a `clock`): they
+/// are grouped by frame ([`scans_of`]) and given to the tracker as one window. Frames without
+/// a detection are not stepped; each tracker jumps such a gap in one prediction.
+pub fn run<T>(
+    tracker: &mut T,
+    detections: &[Detection],
+    clock: Option<&FrameClock>,
+) -> Result<TrackSet>
+where
+    T: BatchTracker + ?Sized,
+    Error: From<T::Error>,
+{
+    let scans = scans_of(detections, clock)?;
+    Ok(tracker.track(&scans)?)
+}

@@ -1,0 +1,226 @@
+//! Every tracker of the workspace through one generic code path on `fixtures/mot`: the walkers
+//! detection file, scored against its ground truth. The floors were fixed before the first run:
+//! 0.6 MOTA for the file trackers (fitted to the file), 0.3 for the library trackers on their
+//! box-scaled defaults (point trackers scored by centre distance).
+#![expect(
+    clippy::unwrap_used,
+    reason = "the helpers fail the test on a bad fixture, like the tests themselves"
+)]
+
+use eval_metrics::{EvalConfig, MatchConfig, Similarity, evaluate};
+use mcmcda::{
+    BatchConfig, BatchMcmcda, Gnn, JpdaAssociation, JpdaTracker, McmcdaConfig,
+    NearestNeighbourConfig, OnlineConfig, OnlineTracker, SingleScanConfig,
+};
+use mot::driver::{detections_of, run};
+use mot::track::{FileTracker, TrackConfig, TrackerKind, track_detections};
+use nalgebra::{Matrix4, Vector4};
+use phd_filter::{GmConfig, GmPhd, PhdConfig, PhdTracker, SmcPhd};
+use tracker_model::{
+    BatchTracker, BoundingBox, Detection, Gaussian, MotRow, Online, TrackSet, position_measurement,
+};
+
+const DETS: &str = include_str!("../../../fixtures/mot/walkers-dets.txt");
+const GT: &str = include_str!("../../../fixtures/mot/walkers-gt.txt");
+
+fn rows() -> Vec<MotRow> {
+    mot::text::parse_detections(DETS, "walkers-dets.txt").unwrap()
+}
+
+/// The one generic path: any tracker, the file's detections, MOTA against the ground truth
+/// (IoU ≥ 0.5 for box tracks, centres within 25 px for point tracks).
+fn track_and_score<T>(tracker: &mut T, detections: &[Detection]) -> (TrackSet, f64)
+where
+    T: BatchTracker + ?Sized,
+    mot::Error: From<T::Error>,
+{
+    let tracks = run(tracker, detections, None).unwrap();
+    let gt = mot::text::parse_evaluation_pair((GT, "gt"), (GT, "gt"))
+        .unwrap()
+        .0;
+    let boxes = tracks
+        .tracks()
+        .iter()
+        .flat_map(|t| t.points())
+        .all(|p| matches!(p.location, tracker_model::Location::Box(_)));
+    let matching = if boxes {
+        MatchConfig::iou(0.5)
+    } else {
+        MatchConfig {
+            similarity: Similarity::Distance { zero_at: 50.0 },
+            threshold: 0.5,
+        }
+    };
+    let report = evaluate(&gt, &tracks, &EvalConfig { matching }).unwrap();
+    (tracks, report.clear.mota)
+}
+
+fn boxes(rows: &[MotRow]) -> Vec<BoundingBox> {
+    rows.iter().map(|r| r.bbox).collect()
+}
+
+#[test]
+fn every_file_tracker_runs_through_the_generic_driver_as_it_runs_alone() {
+    let rows = rows();
+    let detections = detections_of(&rows);
+    for kind in TrackerKind::ALL {
+        let mut tracker = FileTracker {
+            kind,
+            config: TrackConfig::default(),
+            seed: 3,
+        };
+        let (tracks, mota) = track_and_score(&mut tracker, &detections);
+        // The independent route: the file tracker called on the rows themselves.
+        let alone = track_detections(kind, &rows, &TrackConfig::default(), 3).unwrap();
+        assert_eq!(tracks, alone, "{kind}");
+        assert!(mota >= 0.6, "{kind}: MOTA {mota}");
+    }
+}
+
+#[test]
+fn every_library_tracker_runs_through_the_generic_driver() {
+    let rows = rows();
+    let detections = detections_of(&rows);
+    let model = McmcdaConfig::for_boxes(&boxes(&rows))
+        .unwrap()
+        .check()
+        .unwrap();
+    let phd = PhdConfig::for_boxes(&boxes(&rows)).unwrap();
+    let first = rows[0].frame;
+    let mut trackers: Vec<(&str, Box<dyn BatchTracker<Error = mot::Error>>)> = vec![
+        (
+            "offline MCMCDA",
+            boxed(BatchMcmcda {
+                model: model.clone(),
+                config: BatchConfig {
+                    samples: 20_000,
+                    ..BatchConfig::default()
+                },
+            }),
+        ),
+        (
+            "GNN",
+            boxed(Gnn {
+                model: model.clone(),
+                config: NearestNeighbourConfig::default(),
+            }),
+        ),
+        (
+            "online MCMCDA",
+            boxed(Online(
+                OnlineTracker::new(model.clone(), first, OnlineConfig::default(), 5).unwrap(),
+            )),
+        ),
+        (
+            "SMC-PHD",
+            boxed(Online(PhdTracker::global_only(
+                SmcPhd::new(phd, 5).unwrap(),
+            ))),
+        ),
+        (
+            "GM-PHD",
+            boxed(Online(PhdTracker::global_only(
+                GmPhd::new(phd, GmConfig::default()).unwrap(),
+            ))),
+        ),
+    ];
+    for (name, tracker) in &mut trackers {
+        let (tracks, mota) = track_and_score(tracker.as_mut(), &detections);
+        assert!(!tracks.is_empty(), "{name}");
+        assert!(mota >= 0.3, "{name}: MOTA {mota}");
+    }
+}
+
+/// A tracker whose errors become the crate's, so that trackers of several crates share one
+/// list.
+struct Boxed<T>(T);
+
+impl<T: BatchTracker> BatchTracker for Boxed<T>
+where
+    mot::Error: From<T::Error>,
+{
+    type Error = mot::Error;
+
+    fn track(&mut self, scans: &[tracker_model::FrameDetections]) -> Result<TrackSet, mot::Error> {
+        Ok(self.0.track(scans)?)
+    }
+}
+
+fn boxed<T: BatchTracker + 'static>(t: T) -> Box<dyn BatchTracker<Error = mot::Error>>
+where
+    mot::Error: From<T::Error>,
+{
+    Box::new(Boxed(t))
+}
+
+#[test]
+fn the_driver_steps_a_phd_tracker_as_a_hand_written_loop_does() {
+    // The independent route: PhdTracker::step_after by hand over the frames with detections.
+    let rows = rows();
+    let phd = PhdConfig::for_boxes(&boxes(&rows)).unwrap();
+    let (tracks, _) = track_and_score(
+        &mut Online(PhdTracker::global_only(SmcPhd::new(phd, 9).unwrap())),
+        &detections_of(&rows),
+    );
+    let mut by_hand = PhdTracker::global_only(SmcPhd::new(phd, 9).unwrap());
+    let mut frames: Vec<u32> = rows.iter().map(|r| r.frame).collect();
+    frames.dedup();
+    let mut last = None;
+    for f in frames {
+        let b: Vec<BoundingBox> = rows
+            .iter()
+            .filter(|r| r.frame == f)
+            .map(|r| r.bbox)
+            .collect();
+        by_hand
+            .step_after(last.map_or(1, |l| u64::from(f - l)), f, &b)
+            .unwrap();
+        last = Some(f);
+    }
+    assert_eq!(tracks, by_hand.tracks().unwrap());
+}
+
+#[test]
+fn jpda_follows_the_targets_it_is_given_through_the_driver() {
+    // Single-scan association needs its targets: the first frame's detections, at rest with a
+    // wide velocity prior (no truth is read).
+    let rows = rows();
+    let first = rows[0].frame;
+    let priors: Vec<Gaussian<4>> = rows
+        .iter()
+        .filter(|r| r.frame == first)
+        .map(|r| {
+            let c = r.bbox.centre();
+            Gaussian::new(
+                Vector4::new(c.x, c.y, 0.0, 0.0),
+                Matrix4::from_diagonal(&Vector4::new(25.0, 25.0, 16.0, 16.0)),
+            )
+            .unwrap()
+        })
+        .collect();
+    let n = priors.len();
+    let model = McmcdaConfig::for_boxes(&boxes(&rows)).unwrap();
+    let config = SingleScanConfig {
+        clutter_density: 1e-5,
+        burn_in: 200,
+        samples: 2_000,
+        ..SingleScanConfig::default()
+    };
+    let sensor = position_measurement(model.measurement_noise[(0, 0)]).unwrap();
+    let mut tracker = Online(
+        JpdaTracker::new(
+            model.motion,
+            sensor,
+            priors,
+            first,
+            config,
+            JpdaAssociation::Mcmc,
+            1,
+        )
+        .unwrap(),
+    );
+    let (tracks, _) = track_and_score(&mut tracker, &detections_of(&rows));
+    let last = rows.iter().map(|r| r.frame).max().unwrap();
+    assert_eq!(tracks.len(), n);
+    assert!(tracks.tracks().iter().all(|t| t.last_frame() == Some(last)));
+}
