@@ -190,8 +190,18 @@ impl Default for DmtimConfig {
 }
 
 impl DmtimConfig {
-    /// Checks every field (the MCMCDA model is checked per sensor when a run starts).
+    /// Checks every field (the MCMCDA model is checked per sensor when a run starts). The
+    /// first invalid field is reported, in the order the groups below are checked.
     pub fn check(&self) -> Result<()> {
+        self.check_sensors()?;
+        self.check_sensing()?;
+        self.check_tracking()?;
+        self.check_exchange()?;
+        self.check_local_info()
+    }
+
+    /// At least one sensor, each with a positive range and a finite centre.
+    fn check_sensors(&self) -> Result<()> {
         if self.sensors.is_empty() {
             return Err(invalid("sensors", "no sensors".into()));
         }
@@ -204,6 +214,12 @@ impl DmtimConfig {
                 ));
             }
         }
+        Ok(())
+    }
+
+    /// What the simulated sensors observe: a probability, a finite non-negative clutter rate
+    /// and a positive noise.
+    fn check_sensing(&self) -> Result<()> {
         ensure_in_range(self.sensing.p_detect, 0.0, 1.0, "sensing.p_detect")?;
         if !(self.sensing.clutter_per_scan >= 0.0 && self.sensing.clutter_per_scan.is_finite()) {
             return Err(invalid(
@@ -215,6 +231,11 @@ impl DmtimConfig {
             ));
         }
         ensure_positive(self.sensing.noise_std_m, "sensing.noise_std_m")?;
+        Ok(())
+    }
+
+    /// The tracking phase: the window, the interaction distance and the mixing samples.
+    fn check_tracking(&self) -> Result<()> {
         self.online
             .check()
             .map_err(|e| invalid("online", e.to_string()))?;
@@ -224,7 +245,12 @@ impl DmtimConfig {
         }
         self.mixing
             .check()
-            .map_err(|e| invalid("mixing", e.to_string()))?;
+            .map_err(|e| invalid("mixing", e.to_string()))
+    }
+
+    /// Rescaling, fusion and what sensors exchange: the query period, the association gate
+    /// and the hand-over margin.
+    fn check_exchange(&self) -> Result<()> {
         self.scaling
             .check()
             .map_err(|e| invalid("scaling", e.to_string()))?;
@@ -241,6 +267,11 @@ impl DmtimConfig {
                 format!("{} is not finite and non-negative", self.handover_margin_m),
             ));
         }
+        Ok(())
+    }
+
+    /// Local information: probabilities, the doubt ε in (0, 1], and readers that exist.
+    fn check_local_info(&self) -> Result<()> {
         ensure_in_range(
             self.local_info.probability,
             0.0,

@@ -7,8 +7,9 @@ use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use mcmcda::{
-    Chain, McmcdaConfig, NearestNeighbourConfig, OnlineConfig, OnlineTracker, Problem,
-    greedy_initial_partition, nearest_neighbour_tracks,
+    McmcdaConfig, NearestNeighbourConfig, OnlineConfig, OnlineTracker, Problem,
+    chain::{Chain, greedy_initial_partition},
+    nearest_neighbour_tracks,
 };
 use nalgebra::{Matrix2, Vector2};
 use rand::SeedableRng;

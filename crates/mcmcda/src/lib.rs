@@ -9,18 +9,21 @@
 //!   without them for the nearest-neighbour baseline ([`Problem::without_neighbourhoods`]);
 //!   [`Problem::all_scans`] is the window of a whole-problem run;
 //! * [`batch_mcmcda`] with a [`BatchConfig`]: the whole problem in one call (greedy start,
-//!   then [`run_chains`]);
-//! * [`Partition`]: a feasible ω with incremental log posterior;
-//! * [`Chain`] / [`run_chains`]: Algorithm 3 with all eight moves and exact proposal
-//!   probabilities, MAP and MMSE, independent chains in parallel;
+//!   then Algorithm 3's chains with all eight moves and exact proposal probabilities, MAP and
+//!   MMSE, independent chains in parallel), returning a [`McmcdaRun`];
+//! * [`chain`]: the sampler's parts for a caller who builds its own start (a
+//!   [`chain::Partition`], a feasible ω with incremental log posterior) and runs
+//!   [`chain::run_chains`] or a [`chain::Chain`] by hand;
 //! * [`OnlineTracker`]: Algorithm 4, sliding-window MCMCDA with persistent track labels;
 //!   [`OnlineTracker::drain_committed`] streams the final track pieces out and forgets old
-//!   scans ([`Problem::forget_before`]), so a run of any length holds constant memory;
+//!   scans, so a run of any length holds constant memory;
 //! * [`single_scan_mcmcda`]: Algorithms 1-2, JPDA probabilities β for a known number of
 //!   targets by MCMC, and [`jpda_exact`] by enumeration;
 //! * baselines: [`nearest_neighbour_tracks`] (GNN with the log-likelihood-ratio costs of
 //!   [`AssignmentCost`], M-of-N confirmation and deletion after a gap, and the greedy
-//!   filter [`greedy_initial_partition`] that starts the chain);
+//!   filter [`chain::greedy_initial_partition`] that starts the chain);
+//! * the one tracker interface of tracker-model: [`OnlineTracker`] and [`JpdaTracker`] are
+//!   `tracker_model::Tracker`s, [`BatchMcmcda`] and [`Gnn`] `tracker_model::BatchTracker`s;
 //! * [`smoothed_tracks`], [`measurement_labels`], [`tracks_by_origin`]: from partitions to
 //!   trajectories and scores;
 //! * [`mod@reference`]: the log posterior from per-scan counts and partition enumeration.
@@ -85,13 +88,18 @@ pub use batch::{BatchConfig, batch_mcmcda};
 pub use config::{GapDistribution, McmcdaConfig, Model, Move, MoveWeights, TrackEnd, TrackInit};
 pub use error::{Error, Result};
 pub use estimates::{measurement_labels, smoothed_tracks, tracks_by_origin};
-pub use nearest::{
-    Assignment, AssignmentCost, NearestNeighbourConfig, greedy_initial_partition,
-    nearest_neighbour_tracks,
-};
+pub use nearest::{Assignment, AssignmentCost, NearestNeighbourConfig, nearest_neighbour_tracks};
 pub use online::{CommittedPiece, OnlineConfig, OnlineResult, OnlineStep, OnlineTracker};
-pub use partition::Partition;
 pub use problem::{MeasId, Problem};
-pub use sampler::{Chain, McmcdaRun, MoveStats, run_chains};
+pub use sampler::{McmcdaRun, MoveStats};
+
+/// The sampler's parts, beside the front door of [`batch_mcmcda`]: the greedy start, a feasible
+/// partition ω with its incremental log posterior, one chain of Algorithm 3 (Oh, Russell &
+/// Sastry 2009) and independent chains in parallel.
+pub mod chain {
+    pub use crate::nearest::greedy_initial_partition;
+    pub use crate::partition::Partition;
+    pub use crate::sampler::{Chain, run_chains};
+}
 pub use single_scan::{JpdaResult, SingleScanConfig, jpda_exact, single_scan_mcmcda};
 pub use trackers::{BatchMcmcda, Gnn, JpdaAssociation, JpdaTracker};

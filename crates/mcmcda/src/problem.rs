@@ -102,7 +102,7 @@ impl Problem {
     }
 
     /// Whether the neighbourhoods are kept (false for [`Self::without_neighbourhoods`]).
-    pub fn has_neighbourhoods(&self) -> bool {
+    pub(crate) fn has_neighbourhoods(&self) -> bool {
         self.linked
     }
 
@@ -301,7 +301,7 @@ impl Problem {
     /// assert_eq!(problem.n_kept_measurements(), 2);
     /// # Ok::<(), mcmcda::Error>(())
     /// ```
-    pub fn forget_before(&mut self, scan: usize) {
+    pub(crate) fn forget_before(&mut self, scan: usize) {
         let scan = scan.min(self.n_scans);
         if scan <= self.scan_base {
             return;
@@ -352,7 +352,7 @@ impl Problem {
     }
 
     /// The first scan index not forgotten (0 unless [`Self::forget_before`] was called).
-    pub fn first_kept_scan(&self) -> usize {
+    pub(crate) fn first_kept_scan(&self) -> usize {
         self.scan_base
     }
 
@@ -372,7 +372,7 @@ impl Problem {
     }
 
     /// Whether `m` was a measurement of this problem and has been forgotten.
-    pub fn is_forgotten(&self, m: MeasId) -> bool {
+    pub(crate) fn is_forgotten(&self, m: MeasId) -> bool {
         (m as usize) < self.n_measurements() && !self.contains(m)
     }
 
@@ -409,7 +409,7 @@ impl Problem {
     }
 
     /// Whether `a` and `b` can be consecutive measurements of one track `d` scans apart.
-    pub fn within(&self, a: MeasId, b: MeasId, d: usize) -> bool {
+    pub(crate) fn within(&self, a: MeasId, b: MeasId, d: usize) -> bool {
         self.within_of(self.position(a), b, d)
     }
 
@@ -469,7 +469,7 @@ impl Problem {
     }
 
     /// d̄.
-    pub fn max_gap(&self) -> usize {
+    pub(crate) fn max_gap(&self) -> usize {
         self.max_gap
     }
 
@@ -484,7 +484,7 @@ impl Problem {
 
     /// The non-empty scans among the indices `window`, in increasing order, with their
     /// measurements: what a loop over scans visits when empty scans have nothing to do.
-    pub fn nonempty_scans(
+    pub(crate) fn nonempty_scans(
         &self,
         window: RangeInclusive<usize>,
     ) -> impl Iterator<Item = (usize, &[MeasId])> + '_ {
@@ -537,7 +537,7 @@ impl Problem {
     /// # Panics
     /// If `m` is not [`Self::contains`]ed (an unknown or forgotten id), or d is not in 1..=d̄.
     #[track_caller]
-    pub fn forward(&self, m: MeasId, d: usize) -> &[MeasId] {
+    pub(crate) fn forward(&self, m: MeasId, d: usize) -> &[MeasId] {
         self.forward_lists(m).get(d)
     }
 
@@ -568,7 +568,7 @@ impl Problem {
     /// # Panics
     /// If `m` is not [`Self::contains`]ed (an unknown or forgotten id), or d is not in 1..=d̄.
     #[track_caller]
-    pub fn backward(&self, m: MeasId, d: usize) -> &[MeasId] {
+    pub(crate) fn backward(&self, m: MeasId, d: usize) -> &[MeasId] {
         self.backward_lists(m).get(d)
     }
 

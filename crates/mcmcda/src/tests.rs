@@ -12,7 +12,8 @@ use tracker_model::{ConstantVelocity2, Measurement, Origin, Scan, SimulationConf
 use crate::reference::{enumerate_partitions, log_posterior_by_counts};
 use crate::sampler::Chain;
 use crate::{
-    Error, McmcdaConfig, Model, Move, Partition, Problem, TrackEnd, TrackInit, run_chains,
+    Error, McmcdaConfig, Model, Move, Problem, TrackEnd, TrackInit,
+    chain::{Partition, run_chains},
 };
 
 fn scan(frame: u32, points: &[(f64, f64)]) -> Scan {
@@ -512,7 +513,9 @@ fn three_walkers(n_scans: u32, missed: &[(u32, usize)]) -> Vec<Scan> {
 
 #[test]
 fn gnn_and_the_chain_recover_separated_targets() {
-    use crate::{NearestNeighbourConfig, greedy_initial_partition, nearest_neighbour_tracks};
+    use crate::{
+        NearestNeighbourConfig, chain::greedy_initial_partition, nearest_neighbour_tracks,
+    };
     let scans = three_walkers(8, &[(3, 1), (4, 1), (6, 2)]);
     let model = McmcdaConfig::default().check().unwrap();
     let problem = Problem::from_scans(&model, &scans).unwrap();
@@ -962,7 +965,8 @@ fn batch_mcmcda_recovers_separated_targets() {
     assert_eq!(lengths, vec![7, 7, 8]);
     // The same as the greedy start and run_chains by hand.
     let start =
-        crate::greedy_initial_partition(&model, &problem, problem.all_scans().unwrap()).unwrap();
+        crate::chain::greedy_initial_partition(&model, &problem, problem.all_scans().unwrap())
+            .unwrap();
     assert_eq!(run, run_chains(&start, 1, 50_000, 0).unwrap());
 }
 
@@ -2206,7 +2210,9 @@ fn lists_against_brute_force(problem: &Problem, model: &Model) -> usize {
 /// lists, and refuses to be partitioned (MCMCDA needs the lists) with a typed error.
 #[test]
 fn a_problem_without_neighbourhoods_serves_gnn_and_refuses_mcmcda() {
-    use crate::{NearestNeighbourConfig, greedy_initial_partition, nearest_neighbour_tracks};
+    use crate::{
+        NearestNeighbourConfig, chain::greedy_initial_partition, nearest_neighbour_tracks,
+    };
     let scans = three_walkers(8, &[(3, 1), (4, 1), (6, 2)]);
     let model = McmcdaConfig::default().check().unwrap();
     let full = Problem::from_scans(&model, &scans).unwrap();

@@ -249,7 +249,6 @@ impl WalkersConfig {
         let mut walkers: Vec<Walker> = (0..self.initial_walkers)
             .map(|_| self.spawn(rng, true))
             .collect();
-        let (img_w, img_h) = (self.width_px, self.height_px);
         let mut gt = Vec::new();
         let mut detections = Vec::new();
         for frame in 1..=n_frames {
@@ -261,104 +260,15 @@ impl WalkersConfig {
                     walkers.push(self.spawn(rng, false));
                 }
             }
-            // Visible boxes: (walker index, full box, truncated box, foot row).
-            let mut visible: Vec<(usize, [f64; 4], [f64; 4])> = Vec::new();
-            for (i, w) in walkers.iter_mut().enumerate() {
-                if w.gone {
-                    continue;
-                }
-                let Some(full) = self.full_box(w) else {
-                    continue;
-                };
-                let cut = [
-                    full[0].max(0.0),
-                    full[1].max(0.0),
-                    full[2].min(img_w),
-                    full[3].min(img_h),
-                ];
-                let area = (full[2] - full[0]) * (full[3] - full[1]);
-                let cut_area = (cut[2] - cut[0]).max(0.0) * (cut[3] - cut[1]).max(0.0);
-                // In view: at least a fifth of the person and 4 pixels wide.
-                if cut_area >= 0.2 * area && cut[2] - cut[0] >= 4.0 {
-                    w.seen = true;
-                    visible.push((i, full, cut));
-                } else if w.seen {
-                    w.gone = true;
-                }
-                // Walkers that entered and never came into view for 20 s give up.
-            }
-            // Occlusion by nearer people (larger foot row): the covered fraction of each box,
-            // from the union approximated by the largest single overlap plus half the rest.
-            let occluded: Vec<f64> = visible
-                .iter()
-                .map(|&(_, _, a)| {
-                    let area = (a[2] - a[0]) * (a[3] - a[1]);
-                    let mut overlaps: Vec<f64> = visible
-                        .iter()
-                        .filter(|&&(_, _, b)| b[3] > a[3])
-                        .map(|&(_, _, b)| {
-                            let w = (a[2].min(b[2]) - a[0].max(b[0])).max(0.0);
-                            let h = (a[3].min(b[3]) - a[1].max(b[1])).max(0.0);
-                            w * h / area
-                        })
-                        .collect();
-                    overlaps.sort_by(|x, y| y.total_cmp(x));
-                    let first = overlaps.first().copied().unwrap_or(0.0);
-                    let rest: f64 = overlaps.iter().skip(1).sum();
-                    (first + 0.5 * rest).min(1.0)
-                })
-                .collect();
+            let visible = self.visible(&mut walkers);
+            let occluded = occlusion(&visible);
             for (&(i, _, cut), &occ) in visible.iter().zip(&occluded) {
                 gt.push(row(frame, i as i64 + 1, cut, 1.0)?);
-                let p = self.recall * (1.0 - occ).powf(1.5);
-                if rng.random::<f64>() >= p {
-                    continue;
-                }
-                let (bw, bh) = (cut[2] - cut[0], cut[3] - cut[1]);
-                let mut b = [
-                    cut[0] + self.jitter * bw * unit.sample(rng),
-                    cut[1] + self.jitter * bh * unit.sample(rng),
-                    cut[2] + self.jitter * bw * unit.sample(rng),
-                    cut[3] + self.jitter * bh * unit.sample(rng),
-                ];
-                clip(&mut b, img_w, img_h);
-                let score = (0.72 + 0.15 * unit.sample(rng) - 0.3 * occ).clamp(0.05, 1.0);
-                if b[2] - b[0] > 1.0 && b[3] - b[1] > 1.0 {
-                    detections.push(row(frame, -1, b, score)?);
+                if let Some(d) = self.detect(frame, cut, occ, &unit, rng)? {
+                    detections.push(d);
                 }
             }
-            let n_false = if self.false_per_frame > 0.0 {
-                Poisson::new(self.false_per_frame)
-                    .map_err(|e| invalid("false_per_frame", e.to_string()))?
-                    .sample(rng) as usize
-            } else {
-                0
-            };
-            for _ in 0..n_false {
-                let near = !visible.is_empty() && rng.random::<f64>() < 1.0 / 3.0;
-                let mut b = if near {
-                    // A part-body or shifted box on a real person.
-                    let k = (rng.random::<f64>() * visible.len() as f64) as usize;
-                    let c = visible[k.min(visible.len() - 1)].2;
-                    let (bw, bh) = (c[2] - c[0], c[3] - c[1]);
-                    let dx = (0.3 + 0.4 * rng.random::<f64>()) * bw * sign(rng);
-                    let s = 0.5 + 0.4 * rng.random::<f64>();
-                    let top = c[1] + (1.0 - s) * bh * rng.random::<f64>();
-                    [c[0] + dx, top, c[0] + dx + bw, top + s * bh]
-                } else {
-                    let z = DEPTH_M.0 + (DEPTH_M.1 - DEPTH_M.0) * rng.random::<f64>();
-                    let foot = self.horizon_px + self.focal_px * self.camera_height_m / z;
-                    let h = self.focal_px * PERSON_HEIGHT_M / z * (0.7 + 0.5 * rng.random::<f64>());
-                    let cx = img_w * rng.random::<f64>();
-                    let bw = ASPECT * h;
-                    [cx - bw / 2.0, foot - h, cx + bw / 2.0, foot]
-                };
-                clip(&mut b, img_w, img_h);
-                let score = (0.45 + 0.15 * unit.sample(rng)).clamp(0.05, 1.0);
-                if b[2] - b[0] > 1.0 && b[3] - b[1] > 1.0 {
-                    detections.push(row(frame, -1, b, score)?);
-                }
-            }
+            self.false_detections(frame, &visible, &unit, rng, &mut detections)?;
             // Walkers that never came into view within 20 s leave the simulation.
             let limit = (20.0 * self.fps) as usize;
             if (frame as usize).is_multiple_of(limit.max(1)) {
@@ -373,6 +283,137 @@ impl WalkersConfig {
             n_frames,
         })
     }
+
+    /// The walkers in view: (walker index, full box, box cut by the image border), at least a
+    /// fifth of the person and 4 pixels wide. A walker that was seen and leaves the view is
+    /// gone.
+    fn visible(&self, walkers: &mut [Walker]) -> Vec<(usize, [f64; 4], [f64; 4])> {
+        let (img_w, img_h) = (self.width_px, self.height_px);
+        let mut visible = Vec::new();
+        for (i, w) in walkers.iter_mut().enumerate() {
+            if w.gone {
+                continue;
+            }
+            let Some(full) = self.full_box(w) else {
+                continue;
+            };
+            let cut = [
+                full[0].max(0.0),
+                full[1].max(0.0),
+                full[2].min(img_w),
+                full[3].min(img_h),
+            ];
+            let area = (full[2] - full[0]) * (full[3] - full[1]);
+            let cut_area = (cut[2] - cut[0]).max(0.0) * (cut[3] - cut[1]).max(0.0);
+            if cut_area >= 0.2 * area && cut[2] - cut[0] >= 4.0 {
+                w.seen = true;
+                visible.push((i, full, cut));
+            } else if w.seen {
+                w.gone = true;
+            }
+        }
+        visible
+    }
+
+    /// The detector on one visible box `cut`, occluded by the fraction `occ`: found with
+    /// probability recall · (1 − occ)^1.5, its edges jittered, its score lower the more it is
+    /// occluded.
+    fn detect(
+        &self,
+        frame: Frame,
+        cut: [f64; 4],
+        occ: f64,
+        unit: &Normal<f64>,
+        rng: &mut ChaCha8Rng,
+    ) -> Result<Option<MotRow>> {
+        let p = self.recall * (1.0 - occ).powf(1.5);
+        if rng.random::<f64>() >= p {
+            return Ok(None);
+        }
+        let (bw, bh) = (cut[2] - cut[0], cut[3] - cut[1]);
+        let mut b = [
+            cut[0] + self.jitter * bw * unit.sample(rng),
+            cut[1] + self.jitter * bh * unit.sample(rng),
+            cut[2] + self.jitter * bw * unit.sample(rng),
+            cut[3] + self.jitter * bh * unit.sample(rng),
+        ];
+        clip(&mut b, self.width_px, self.height_px);
+        let score = (0.72 + 0.15 * unit.sample(rng) - 0.3 * occ).clamp(0.05, 1.0);
+        if b[2] - b[0] > 1.0 && b[3] - b[1] > 1.0 {
+            return Ok(Some(row(frame, -1, b, score)?));
+        }
+        Ok(None)
+    }
+
+    /// A Poisson number of false detections: a third are part-body or shifted boxes on a
+    /// visible person, the rest person-sized boxes anywhere on the ground.
+    fn false_detections(
+        &self,
+        frame: Frame,
+        visible: &[(usize, [f64; 4], [f64; 4])],
+        unit: &Normal<f64>,
+        rng: &mut ChaCha8Rng,
+        detections: &mut Vec<MotRow>,
+    ) -> Result<()> {
+        let (img_w, img_h) = (self.width_px, self.height_px);
+        let n_false = if self.false_per_frame > 0.0 {
+            Poisson::new(self.false_per_frame)
+                .map_err(|e| invalid("false_per_frame", e.to_string()))?
+                .sample(rng) as usize
+        } else {
+            0
+        };
+        for _ in 0..n_false {
+            let near = !visible.is_empty() && rng.random::<f64>() < 1.0 / 3.0;
+            let mut b = if near {
+                // A part-body or shifted box on a real person.
+                let k = (rng.random::<f64>() * visible.len() as f64) as usize;
+                let c = visible[k.min(visible.len() - 1)].2;
+                let (bw, bh) = (c[2] - c[0], c[3] - c[1]);
+                let dx = (0.3 + 0.4 * rng.random::<f64>()) * bw * sign(rng);
+                let s = 0.5 + 0.4 * rng.random::<f64>();
+                let top = c[1] + (1.0 - s) * bh * rng.random::<f64>();
+                [c[0] + dx, top, c[0] + dx + bw, top + s * bh]
+            } else {
+                let z = DEPTH_M.0 + (DEPTH_M.1 - DEPTH_M.0) * rng.random::<f64>();
+                let foot = self.horizon_px + self.focal_px * self.camera_height_m / z;
+                let h = self.focal_px * PERSON_HEIGHT_M / z * (0.7 + 0.5 * rng.random::<f64>());
+                let cx = img_w * rng.random::<f64>();
+                let bw = ASPECT * h;
+                [cx - bw / 2.0, foot - h, cx + bw / 2.0, foot]
+            };
+            clip(&mut b, img_w, img_h);
+            let score = (0.45 + 0.15 * unit.sample(rng)).clamp(0.05, 1.0);
+            if b[2] - b[0] > 1.0 && b[3] - b[1] > 1.0 {
+                detections.push(row(frame, -1, b, score)?);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Occlusion by nearer people (larger foot row): the covered fraction of each visible box,
+/// from the union approximated by the largest single overlap plus half the rest.
+fn occlusion(visible: &[(usize, [f64; 4], [f64; 4])]) -> Vec<f64> {
+    visible
+        .iter()
+        .map(|&(_, _, a)| {
+            let area = (a[2] - a[0]) * (a[3] - a[1]);
+            let mut overlaps: Vec<f64> = visible
+                .iter()
+                .filter(|&&(_, _, b)| b[3] > a[3])
+                .map(|&(_, _, b)| {
+                    let w = (a[2].min(b[2]) - a[0].max(b[0])).max(0.0);
+                    let h = (a[3].min(b[3]) - a[1].max(b[1])).max(0.0);
+                    w * h / area
+                })
+                .collect();
+            overlaps.sort_by(|x, y| y.total_cmp(x));
+            let first = overlaps.first().copied().unwrap_or(0.0);
+            let rest: f64 = overlaps.iter().skip(1).sum();
+            (first + 0.5 * rest).min(1.0)
+        })
+        .collect()
 }
 
 fn sign(rng: &mut ChaCha8Rng) -> f64 {

@@ -85,94 +85,25 @@ fn link_tracklets(
     if max_gap == 0 || tracks.len() < 2 {
         return tracks;
     }
-    const GATE: f64 = 9.21;
-    let r = [
-        model.measurement_noise[(0, 0)],
-        model.measurement_noise[(1, 1)],
-    ];
-    let q = match model.motion.noise() {
-        tracker_model::CvNoise::Discrete {
-            acceleration_covariance,
-        } => acceleration_covariance[(0, 0)],
-        tracker_model::CvNoise::WhiteAcceleration { q } => q,
-    };
-    // Centre and velocity at one end of a track (its first or last 8 detections).
-    let end_state = |meas: &[MeasId], at_end: bool| -> (Frame, Vec2, Vec2, f64) {
-        let k = meas.len().min(8);
-        let part = if at_end {
-            &meas[meas.len() - k..]
-        } else {
-            &meas[..k]
-        };
-        let pts: Vec<(f64, Vec2)> = part
-            .iter()
-            .map(|&m| {
-                let d = &detections[m as usize];
-                (f64::from(d.frame), d.bbox.centre())
-            })
-            .collect();
-        let n = pts.len() as f64;
-        let tm = pts.iter().map(|p| p.0).sum::<f64>() / n;
-        let cm = pts.iter().fold(Vec2::zeros(), |a, p| a + p.1) / n;
-        let stt = pts.iter().map(|p| (p.0 - tm).powi(2)).sum::<f64>();
-        let v = if stt > 0.0 {
-            pts.iter()
-                .fold(Vec2::zeros(), |a, p| a + (p.1 - cm) * (p.0 - tm))
-                / stt
-        } else {
-            Vec2::zeros()
-        };
-        let m = if at_end {
-            meas[meas.len() - 1]
-        } else {
-            meas[0]
-        };
-        let d = &detections[m as usize];
-        // The fitted line's value at the end frame.
-        let c = cm + v * (f64::from(d.frame) - tm);
-        (d.frame, c, v, d.bbox.height)
-    };
-    let ends: Vec<_> = tracks.iter().map(|t| end_state(t, true)).collect();
-    let starts: Vec<_> = tracks.iter().map(|t| end_state(t, false)).collect();
-    let n = tracks.len();
-    let mut pairs = Vec::new();
-    for (a, &(la, ca, va, ha)) in ends.iter().enumerate() {
-        for (b, &(sb, cb, vb, hb)) in starts.iter().enumerate() {
-            if a == b || sb <= la || sb - la > max_gap || (hb / ha).ln().abs() > 0.3_f64.ln_1p() {
-                continue;
-            }
-            let g = f64::from(sb - la);
-            let var = [0, 1].map(|k| 2.0 * r[k] + q * g.powi(3) / 3.0);
-            let d2 = |e: Vec2| e.x * e.x / var[0] + e.y * e.y / var[1];
-            let (df, db) = (d2(ca + va * g - cb), d2(cb - vb * g - ca));
-            if df <= GATE && db <= GATE {
-                pairs.push((a, b, df + db));
-            }
-        }
-    }
+    let ends: Vec<_> = tracks
+        .iter()
+        .map(|t| end_state(t, detections, true))
+        .collect();
+    let starts: Vec<_> = tracks
+        .iter()
+        .map(|t| end_state(t, detections, false))
+        .collect();
+    let pairs = link_candidates(&ends, &starts, model, max_gap);
     if pairs.is_empty() {
         return tracks;
     }
-    // Rows: ends; columns: starts, then one "no link" column per end at the gate's cost.
-    let n_cols = 2 * n;
-    let forbidden = 1e6;
-    let mut costs = vec![forbidden; n * n_cols];
-    for &(a, b, c) in &pairs {
-        costs[a * n_cols + b] = c;
-    }
-    for a in 0..n {
-        costs[a * n_cols + n + a] = 2.0 * GATE;
-    }
-    let Ok(chosen) = tracker_model::assignment::minimise(n, n_cols, &costs) else {
+    let Some(next) = chosen_links(tracks.len(), &pairs) else {
         return tracks;
     };
-    let mut next: Vec<Option<usize>> = vec![None; n];
+    let n = tracks.len();
     let mut has_prev = vec![false; n];
-    for (a, b) in chosen {
-        if b < n && costs[a * n_cols + b] < forbidden {
-            next[a] = Some(b);
-            has_prev[b] = true;
-        }
+    for b in next.iter().flatten() {
+        has_prev[*b] = true;
     }
     let mut out = Vec::with_capacity(n);
     for start in (0..n).filter(|&i| !has_prev[i]) {
@@ -187,6 +118,111 @@ fn link_tracklets(
         out.push(chain);
     }
     out
+}
+
+/// The 99 % χ² gate (2 degrees of freedom) of a link's two prediction distances.
+const LINK_GATE: f64 = 9.21;
+
+/// One end of a track for linking: its frame, the centre and velocity of a line fitted to its
+/// first or last 8 detections (the centre at the end frame), and the box height there.
+type TrackEnd = (Frame, Vec2, Vec2, f64);
+
+/// The start (`at_end` false) or end of the track `meas`.
+fn end_state(meas: &[MeasId], detections: &[MotRow], at_end: bool) -> TrackEnd {
+    let k = meas.len().min(8);
+    let part = if at_end {
+        &meas[meas.len() - k..]
+    } else {
+        &meas[..k]
+    };
+    let pts: Vec<(f64, Vec2)> = part
+        .iter()
+        .map(|&m| {
+            let d = &detections[m as usize];
+            (f64::from(d.frame), d.bbox.centre())
+        })
+        .collect();
+    let n = pts.len() as f64;
+    let tm = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let cm = pts.iter().fold(Vec2::zeros(), |a, p| a + p.1) / n;
+    let stt = pts.iter().map(|p| (p.0 - tm).powi(2)).sum::<f64>();
+    let v = if stt > 0.0 {
+        pts.iter()
+            .fold(Vec2::zeros(), |a, p| a + (p.1 - cm) * (p.0 - tm))
+            / stt
+    } else {
+        Vec2::zeros()
+    };
+    let m = if at_end {
+        meas[meas.len() - 1]
+    } else {
+        meas[0]
+    };
+    let d = &detections[m as usize];
+    // The fitted line's value at the end frame.
+    let c = cm + v * (f64::from(d.frame) - tm);
+    (d.frame, c, v, d.bbox.height)
+}
+
+/// Every (end a, start b, cost) whose gap is at most `max_gap`, whose heights agree within
+/// 30 % and whose two predictions over the gap both pass [`LINK_GATE`]; the cost is the sum
+/// of the two squared Mahalanobis distances.
+fn link_candidates(
+    ends: &[TrackEnd],
+    starts: &[TrackEnd],
+    model: &McmcdaConfig,
+    max_gap: u32,
+) -> Vec<(usize, usize, f64)> {
+    let r = [
+        model.measurement_noise[(0, 0)],
+        model.measurement_noise[(1, 1)],
+    ];
+    let q = match model.motion.noise() {
+        tracker_model::CvNoise::Discrete {
+            acceleration_covariance,
+        } => acceleration_covariance[(0, 0)],
+        tracker_model::CvNoise::WhiteAcceleration { q } => q,
+    };
+    let mut pairs = Vec::new();
+    for (a, &(la, ca, va, ha)) in ends.iter().enumerate() {
+        for (b, &(sb, cb, vb, hb)) in starts.iter().enumerate() {
+            if a == b || sb <= la || sb - la > max_gap || (hb / ha).ln().abs() > 0.3_f64.ln_1p() {
+                continue;
+            }
+            let g = f64::from(sb - la);
+            let var = [0, 1].map(|k| 2.0 * r[k] + q * g.powi(3) / 3.0);
+            let d2 = |e: Vec2| e.x * e.x / var[0] + e.y * e.y / var[1];
+            let (df, db) = (d2(ca + va * g - cb), d2(cb - vb * g - ca));
+            if df <= LINK_GATE && db <= LINK_GATE {
+                pairs.push((a, b, df + db));
+            }
+        }
+    }
+    pairs
+}
+
+/// The one-to-one assignment of the `n` tracks' ends to starts at least total cost, each end
+/// free to stay unlinked at twice the gate's cost: the start that follows each end, if any.
+/// `None` if the solver fails.
+fn chosen_links(n: usize, pairs: &[(usize, usize, f64)]) -> Option<Vec<Option<usize>>> {
+    // Rows: ends; columns: starts, then one "no link" column per end at the gate's cost.
+    let n_cols = 2 * n;
+    let forbidden = 1e6;
+    let mut costs = vec![forbidden; n * n_cols];
+    for &(a, b, c) in pairs {
+        costs[a * n_cols + b] = c;
+    }
+    for a in 0..n {
+        costs[a * n_cols + n + a] = 2.0 * LINK_GATE;
+    }
+    let chosen = tracker_model::assignment::minimise(n, n_cols, &costs).ok()?;
+    let mut next: Vec<Option<usize>> = vec![None; n];
+    for (a, b) in chosen {
+        if b < n && costs[a * n_cols + b] < forbidden {
+            next[a] = Some(b);
+        }
+    }
+    Some(next)
 }
 
 /// GNN's tracks output as a frame-by-frame tracker would have output them. GNN's

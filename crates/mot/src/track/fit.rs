@@ -82,58 +82,100 @@ pub fn fit_model(base: &McmcdaConfig, rows: &[MotRow], fit: &FitConfig) -> Resul
         if confident.is_empty() {
             break;
         }
+        let mut moments = Moments::of(&confident, &problem, &detections);
+        let assigned: usize = tracks.iter().filter(|t| t.len() >= 3).map(Vec::len).sum();
+        let clutter = (rows.len() as f64 - assigned as f64).max(0.0) / n_frames;
+        config.p_detect = (moments.n_det / moments.n_span).clamp(0.3, 0.99);
+        config.clutter_per_scan = clutter.clamp(0.01, 1e3);
+        config.births_per_scan = (confident.len() as f64 / n_frames).clamp(1e-3, 1e2);
+        config.p_disappear = (confident.len() as f64 / moments.n_span).clamp(1e-4, 0.5);
+        if !moments.fit_noise_and_speed(&mut config)? {
+            break;
+        }
+    }
+    Ok(config)
+}
+
+/// The sums of the confident tracks that [`fit_model`]'s moment estimates read.
+struct Moments {
+    /// Detections, and frames spanned, over the tracks.
+    n_det: f64,
+    n_span: f64,
+    /// Sums of squares per axis, in box widths (x) and heights (y): lag-1 second
+    /// differences, lag-2, central velocities; and how many of each.
+    v1: [f64; 2],
+    v2: [f64; 2],
+    vel: [f64; 2],
+    n1: f64,
+    n2: f64,
+    /// Speeds between consecutive detections in box widths per frame, and box sizes.
+    speeds: Vec<f64>,
+    widths: Vec<f64>,
+    heights: Vec<f64>,
+}
+
+impl Moments {
+    fn of(confident: &[&Vec<MeasId>], problem: &Problem, detections: &[MotRow]) -> Self {
         let size = |m: MeasId| {
             let b = detections[m as usize].bbox;
             [b.width, b.height]
         };
-        let (mut n_det, mut n_span) = (0.0, 0.0);
-        // Sums of squares per axis, in box widths (x) and heights (y): lag-1 second
-        // differences, lag-2, central velocities.
-        let (mut v1, mut v2, mut vel) = ([0.0f64; 2], [0.0f64; 2], [0.0f64; 2]);
-        let (mut n1, mut n2) = (0.0f64, 0.0f64);
-        let (mut speeds, mut widths, mut heights) = (Vec::new(), Vec::new(), Vec::new());
-        for t in &confident {
-            n_det += t.len() as f64;
+        let mut s = Self {
+            n_det: 0.0,
+            n_span: 0.0,
+            v1: [0.0; 2],
+            v2: [0.0; 2],
+            vel: [0.0; 2],
+            n1: 0.0,
+            n2: 0.0,
+            speeds: Vec::new(),
+            widths: Vec::new(),
+            heights: Vec::new(),
+        };
+        for t in confident {
+            s.n_det += t.len() as f64;
             let scans: Vec<usize> = t.iter().map(|&m| problem.scan_of(m)).collect();
-            n_span += (scans[scans.len() - 1] - scans[0] + 1) as f64;
+            s.n_span += (scans[scans.len() - 1] - scans[0] + 1) as f64;
             // Ordered, so that the sums (and the fitted model) do not depend on hashing.
             let at: std::collections::BTreeMap<usize, MeasId> =
                 t.iter().map(|&m| (problem.scan_of(m), m)).collect();
             for pair in t.windows(2) {
                 let gap = (problem.scan_of(pair[1]) - problem.scan_of(pair[0])) as f64;
                 let d = (problem.position(pair[1]) - problem.position(pair[0])).norm() / gap;
-                speeds.push(d / size(pair[1])[0]);
+                s.speeds.push(d / size(pair[1])[0]);
             }
-            for (&s, &m) in &at {
+            for (&scan, &m) in &at {
                 let z = problem.position(m);
                 let wh = size(m);
-                widths.push(wh[0]);
-                heights.push(wh[1]);
-                if let (Some(&a), Some(&b)) = (at.get(&(s.wrapping_sub(1))), at.get(&(s + 1))) {
+                s.widths.push(wh[0]);
+                s.heights.push(wh[1]);
+                if let (Some(&a), Some(&b)) = (at.get(&(scan.wrapping_sub(1))), at.get(&(scan + 1)))
+                {
                     let (a, b) = (problem.position(a), problem.position(b));
                     let d = b - 2.0 * z + a;
                     let v = (b - a) / 2.0;
                     for k in 0..2 {
-                        v1[k] += (d[k] / wh[k]).powi(2);
-                        vel[k] += (v[k] / wh[k]).powi(2);
+                        s.v1[k] += (d[k] / wh[k]).powi(2);
+                        s.vel[k] += (v[k] / wh[k]).powi(2);
                     }
-                    n1 += 1.0;
+                    s.n1 += 1.0;
                 }
-                if let (Some(&a), Some(&b)) = (at.get(&(s.wrapping_sub(2))), at.get(&(s + 2))) {
+                if let (Some(&a), Some(&b)) = (at.get(&(scan.wrapping_sub(2))), at.get(&(scan + 2)))
+                {
                     let d = problem.position(b) - 2.0 * z + problem.position(a);
                     for k in 0..2 {
-                        v2[k] += (d[k] / wh[k]).powi(2);
+                        s.v2[k] += (d[k] / wh[k]).powi(2);
                     }
-                    n2 += 1.0;
+                    s.n2 += 1.0;
                 }
             }
         }
-        let assigned: usize = tracks.iter().filter(|t| t.len() >= 3).map(Vec::len).sum();
-        let clutter = (rows.len() as f64 - assigned as f64).max(0.0) / n_frames;
-        config.p_detect = (n_det / n_span).clamp(0.3, 0.99);
-        config.clutter_per_scan = clutter.clamp(0.01, 1e3);
-        config.births_per_scan = (confident.len() as f64 / n_frames).clamp(1e-3, 1e2);
-        config.p_disappear = (confident.len() as f64 / n_span).clamp(1e-4, 0.5);
+        s
+    }
+
+    /// R, q, the newborn velocity variance, v̄ and d̄ from the sums (see [`fit_model`]);
+    /// `false` when there is no box to scale them by (the fit stops).
+    fn fit_noise_and_speed(&mut self, config: &mut McmcdaConfig) -> Result<bool> {
         // The noise grows with the box: the relative moments are turned into pixels at a
         // large box (the 90th percentile of widths and heights), so that gates hold for the
         // nearest people.
@@ -141,14 +183,14 @@ pub fn fit_model(base: &McmcdaConfig, rows: &[MotRow], fit: &FitConfig) -> Resul
             v.sort_by(f64::total_cmp);
             v.get(v.len() * p / 100).copied()
         };
-        let (Some(w90), Some(h90), Some(w50)) = (
-            percentile(&mut widths, 90),
-            percentile(&mut heights, 90),
-            percentile(&mut widths.clone(), 50),
+        let (Some(w90), Some(h90)) = (
+            percentile(&mut self.widths, 90),
+            percentile(&mut self.heights, 90),
         ) else {
-            break;
+            return Ok(false);
         };
         let scale = [w90 * w90, h90 * h90];
+        let (v1, v2, vel, n1, n2) = (self.v1, self.v2, self.vel, self.n1, self.n2);
         if n1 >= 10.0 && n2 >= 10.0 {
             let (mut r, mut q) = ([0.0; 2], [0.0; 2]);
             for k in 0..2 {
@@ -173,18 +215,17 @@ pub fn fit_model(base: &McmcdaConfig, rows: &[MotRow], fit: &FitConfig) -> Resul
                 };
             }
         }
-        if let Some(p99) = percentile(&mut speeds.clone(), 99) {
+        if let Some(p99) = percentile(&mut self.speeds.clone(), 99) {
             config.max_speed = config.max_speed.max(1.5 * p99 * w90);
         }
         // A track may bridge the frames in which its target moves about `GAP_BOX_WIDTHS` box
         // widths (an occlusion by a passer-by lasts about that long).
-        if let Some(p50) = percentile(&mut speeds, 50) {
+        if let Some(p50) = percentile(&mut self.speeds, 50) {
             let frames = (GAP_BOX_WIDTHS / p50.max(1e-3)).round().clamp(3.0, 30.0);
             config.max_gap = frames as u32;
         }
-        let _ = w50;
+        Ok(true)
     }
-    Ok(config)
 }
 
 /// How much the fitted R and q are widened over the moment estimates: the detections' errors
@@ -259,33 +300,7 @@ pub fn fit_scores(
     }
     let step = (hi - lo) / (SCORE_GRID - 1) as f64;
     let grid: Vec<f64> = (0..SCORE_GRID).map(|i| lo + step * i as f64).collect();
-    // Size, mean and sample standard deviation.
-    let moments = |v: &[f64]| {
-        let n = v.len() as f64;
-        let mean = v.iter().sum::<f64>() / n;
-        let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        (v.len(), mean, sd)
-    };
-    let density = |v: &[f64]| -> Vec<f64> {
-        let (_, _, sd) = moments(v);
-        let n = v.len() as f64;
-        let mut sorted = v.to_vec();
-        sorted.sort_by(f64::total_cmp);
-        let iqr = sorted[sorted.len() * 3 / 4] - sorted[sorted.len() / 4];
-        let spread = if iqr > 0.0 { sd.min(iqr / 1.34) } else { sd };
-        // Never narrower than the grid's step (a constant sample would be a spike).
-        let h = (0.9 * spread * n.powf(-0.2)).max(step);
-        grid.iter()
-            .map(|&x| {
-                let kde = v
-                    .iter()
-                    .map(|s| (-0.5 * ((x - s) / h).powi(2)).exp())
-                    .sum::<f64>()
-                    / (n * h * (2.0 * std::f64::consts::PI).sqrt());
-                (n * kde + 1.0 / (hi - lo)) / (n + 1.0)
-            })
-            .collect()
-    };
+    let density = |v: &[f64]| score_density(v, &grid, step, hi - lo);
     let (f1, f0) = (density(&track), density(&clutter));
     let bound = config.max_log_ratio;
     let log_ratio = f1
@@ -300,4 +315,37 @@ pub fn fit_scores(
         track: moments(&track),
         clutter: moments(&clutter),
     }))
+}
+
+/// Size, mean and sample standard deviation.
+fn moments(v: &[f64]) -> (usize, f64, f64) {
+    let n = v.len() as f64;
+    let mean = v.iter().sum::<f64>() / n;
+    let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    (v.len(), mean, sd)
+}
+
+/// The density of the scores `v` at the `grid` points: a Gaussian kernel estimate with
+/// Silverman's bandwidth (0.9 min(σ, IQR/1.34) n^(−1/5), never narrower than the grid's
+/// `step`), mixed with one uniform pseudo-observation over the score range `span` so that no
+/// density is 0.
+fn score_density(v: &[f64], grid: &[f64], step: f64, span: f64) -> Vec<f64> {
+    let (_, _, sd) = moments(v);
+    let n = v.len() as f64;
+    let mut sorted = v.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let iqr = sorted[sorted.len() * 3 / 4] - sorted[sorted.len() / 4];
+    let spread = if iqr > 0.0 { sd.min(iqr / 1.34) } else { sd };
+    // Never narrower than the grid's step (a constant sample would be a spike).
+    let h = (0.9 * spread * n.powf(-0.2)).max(step);
+    grid.iter()
+        .map(|&x| {
+            let kde = v
+                .iter()
+                .map(|s| (-0.5 * ((x - s) / h).powi(2)).exp())
+                .sum::<f64>()
+                / (n * h * (2.0 * std::f64::consts::PI).sqrt());
+            (n * kde + 1.0 / span) / (n + 1.0)
+        })
+        .collect()
 }

@@ -25,8 +25,9 @@ use std::str::FromStr;
 
 use crate::error::{Error, InTable, Result, invalid};
 use mcmcda::{
-    McmcdaConfig, MeasId, NearestNeighbourConfig, OnlineConfig, OnlineTracker, Partition, Problem,
-    TrackInit, nearest_neighbour_tracks, run_chains,
+    McmcdaConfig, MeasId, NearestNeighbourConfig, OnlineConfig, OnlineTracker, Problem, TrackInit,
+    chain::{Partition, run_chains},
+    nearest_neighbour_tracks,
 };
 use phd_filter::{PhdConfig, SmcPhd};
 use serde::{Deserialize, Serialize};
@@ -446,62 +447,14 @@ impl TrackConfig {
                 PhdConfig::for_boxes(&boxes)?,
             )
         };
-        if self.fit.min_track_detections < 3 {
-            return Err(invalid(
-                "min_track_detections",
-                format!(
-                    "{}; the moment estimates need at least 3",
-                    self.fit.min_track_detections
-                ),
-            ))
-            .in_table("fit");
-        }
-        self.offline.check().in_table("offline")?;
-        self.boxes.check().in_table("boxes")?;
-        self.scores.check().in_table("scores")?;
+        self.check_tables()?;
         let model_base = if boxes.is_empty() {
             model_base
         } else {
             fit_model(&model_base, rows, &self.fit)?
         };
         if self.fit.iterations > 0 && !boxes.is_empty() {
-            // The PHD filter's rates, noise and motion come from the same fit: constant
-            // velocity with MCMCDA's q, newborn velocity σ from the fitted velocity variance,
-            // the centre's R and twice its σ for the size.
-            phd_base.p_detect = model_base.p_detect;
-            phd_base.clutter_rate = model_base.clutter_per_scan;
-            phd_base.birth_rate = model_base.births_per_scan;
-            // Floors at half the box-scaled σ: a particle filter needs likelihoods wider than
-            // the spacing of its particles (near-noiseless files would starve it).
-            let r = model_base.measurement_noise;
-            let floor = phd_base.measurement_std;
-            let (sx, sy) = (r[(0, 0)].sqrt(), r[(1, 1)].sqrt());
-            phd_base.measurement_std = [
-                sx.max(0.5 * floor[0]),
-                sy.max(0.5 * floor[1]),
-                (2.0 * sx).max(0.5 * floor[2]),
-                (2.0 * sy).max(0.5 * floor[3]),
-            ];
-            let size_std = match phd_base.motion {
-                phd_filter::Motion::RandomWalk { size_std, .. }
-                | phd_filter::Motion::ConstantVelocity { size_std, .. } => size_std,
-            };
-            let q = match model_base.motion.noise() {
-                tracker_model::CvNoise::Discrete {
-                    acceleration_covariance,
-                } => acceleration_covariance[(0, 0)],
-                tracker_model::CvNoise::WhiteAcceleration { q } => q,
-            };
-            phd_base.motion = phd_filter::Motion::ConstantVelocity {
-                acceleration_std: q.sqrt().max(0.1 * floor[0]),
-                size_std,
-            };
-            if let TrackInit::FirstMeasurement {
-                velocity_variance: Some(v),
-            } = model_base.track_init
-            {
-                phd_base.birth_velocity_std = v.sqrt();
-            }
+            phd_base = phd_fitted(&model_base, phd_base);
         }
         let model = overridden(&model_base, self.model.as_ref(), "model")?;
         model.check().in_table("model")?;
@@ -624,6 +577,67 @@ pub fn track_detections_with_frames(
         (None, _) => track_points(tracker, &rows, &config, seed)?,
     };
     Ok((tracks, config))
+}
+
+impl TrackConfig {
+    /// Checks the tables that need no detections: `[fit]`, `[offline]`, `[boxes]`, `[scores]`.
+    fn check_tables(&self) -> Result<()> {
+        if self.fit.min_track_detections < 3 {
+            return Err(invalid(
+                "min_track_detections",
+                format!(
+                    "{}; the moment estimates need at least 3",
+                    self.fit.min_track_detections
+                ),
+            ))
+            .in_table("fit");
+        }
+        self.offline.check().in_table("offline")?;
+        self.boxes.check().in_table("boxes")?;
+        self.scores.check().in_table("scores")?;
+        Ok(())
+    }
+}
+
+/// The PHD filter's rates, noise and motion from the MCMCDA model fitted to the file:
+/// constant velocity with MCMCDA's q, newborn velocity σ from the fitted velocity variance,
+/// the centre's R and twice its σ for the size.
+fn phd_fitted(model_base: &McmcdaConfig, mut phd_base: PhdConfig) -> PhdConfig {
+    phd_base.p_detect = model_base.p_detect;
+    phd_base.clutter_rate = model_base.clutter_per_scan;
+    phd_base.birth_rate = model_base.births_per_scan;
+    // Floors at half the box-scaled σ: a particle filter needs likelihoods wider than
+    // the spacing of its particles (near-noiseless files would starve it).
+    let r = model_base.measurement_noise;
+    let floor = phd_base.measurement_std;
+    let (sx, sy) = (r[(0, 0)].sqrt(), r[(1, 1)].sqrt());
+    phd_base.measurement_std = [
+        sx.max(0.5 * floor[0]),
+        sy.max(0.5 * floor[1]),
+        (2.0 * sx).max(0.5 * floor[2]),
+        (2.0 * sy).max(0.5 * floor[3]),
+    ];
+    let size_std = match phd_base.motion {
+        phd_filter::Motion::RandomWalk { size_std, .. }
+        | phd_filter::Motion::ConstantVelocity { size_std, .. } => size_std,
+    };
+    let q = match model_base.motion.noise() {
+        tracker_model::CvNoise::Discrete {
+            acceleration_covariance,
+        } => acceleration_covariance[(0, 0)],
+        tracker_model::CvNoise::WhiteAcceleration { q } => q,
+    };
+    phd_base.motion = phd_filter::Motion::ConstantVelocity {
+        acceleration_std: q.sqrt().max(0.1 * floor[0]),
+        size_std,
+    };
+    if let TrackInit::FirstMeasurement {
+        velocity_variance: Some(v),
+    } = model_base.track_init
+    {
+        phd_base.birth_velocity_std = v.sqrt();
+    }
+    phd_base
 }
 
 /// Why a tracker that was given detections returned no track, or nothing when it returned

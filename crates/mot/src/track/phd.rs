@@ -1,5 +1,7 @@
 //! The SMC-PHD filter on boxes with its label-based track manager (`[phd_labels]`).
 
+use phd_filter::Estimate;
+
 use super::*;
 
 /// Track management on top of the SMC-PHD filter's per-frame estimates (the labelled-PHD
@@ -73,9 +75,7 @@ pub(super) fn track_boxes_phd(
     settings: &EffectiveConfig,
     seed: u64,
 ) -> Result<TrackSet> {
-    let config = settings.phd;
-    let labels = settings.phd_labels;
-    let mut phd = SmcPhd::new(config, seed)?;
+    let mut phd = SmcPhd::new(settings.phd, seed)?;
     let mut by_frame: std::collections::BTreeMap<Frame, Vec<BoundingBox>> = Default::default();
     for r in rows {
         by_frame.entry(r.frame).or_default().push(r.bbox);
@@ -91,22 +91,73 @@ pub(super) fn track_boxes_phd(
     // transition and weights p_Sᵏ (1 − p_D)ᵏ⁻¹ (`SmcPhd::step_after`), and the labeller
     // coasts through it in closed form (`coast_through_gap`). The cost is bounded by the
     // detection frames, not by the span of frame numbers.
-    let mut live: Vec<PhdTrack> = Vec::new();
-    let mut done: Vec<PhdTrack> = Vec::new();
-    let mut next_id = 1u64;
+    let mut labeller = Labeller::new(settings);
     let mut previous: Option<Frame> = None;
-    let mut step_frame = |frame: Frame,
-                          frames: u64,
-                          boxes: &[BoundingBox],
-                          phd: &mut SmcPhd,
-                          live: &mut Vec<PhdTrack>,
-                          done: &mut Vec<PhdTrack>|
-     -> Result<()> {
-        let step = phd.step_after(frames, boxes)?;
-        let mass = LabelMasses::of(phd);
+    // The frames run on a thread of rayon's pool, so that the filter's parallel passes fork
+    // from inside the pool. Called from outside it, each pass was handed to the pool and
+    // waited for, a sleep and a wake-up of this thread per pass, which cost more than the
+    // second thread saved: on the realistic files of `mot-realistic` the PHD tracker took
+    // about 0.21 ms per frame that way and 0.15 this way (2 threads, load ≈ 3). The output is
+    // the same either way: no result depends on the threads.
+    rayon::scope(|_| -> Result<()> {
+        for (&frame, boxes) in &by_frame {
+            let frames = match previous {
+                Some(prev) => {
+                    let frames = u64::from(frame) - u64::from(prev);
+                    if frames > 1 {
+                        coast_through_gap(
+                            prev,
+                            frames - 1,
+                            &phd,
+                            &mut labeller.live,
+                            &mut labeller.done,
+                            settings,
+                        )?;
+                    }
+                    frames
+                }
+                None => 1,
+            };
+            let step = phd.step_after(frames, boxes)?;
+            let mass = LabelMasses::of(&phd);
+            let updated = labeller.take_estimates(frame, &step.estimates);
+            labeller.manage(frame, updated, &mass);
+            previous = Some(frame);
+        }
+        Ok(())
+    })?;
+    labeller.finish()
+}
+
+/// The track manager's state: live tracks (tentative or confirmed), ended ones, and the next
+/// id to give.
+struct Labeller {
+    config: PhdConfig,
+    labels: PhdLabelConfig,
+    live: Vec<PhdTrack>,
+    done: Vec<PhdTrack>,
+    next_id: u64,
+}
+
+impl Labeller {
+    fn new(settings: &EffectiveConfig) -> Self {
+        Self {
+            config: settings.phd,
+            labels: settings.phd_labels,
+            live: Vec::new(),
+            done: Vec::new(),
+            next_id: 1,
+        }
+    }
+
+    /// Gives each of a frame's estimates to the live track that holds its label, else to the
+    /// unmatched one whose predicted box it overlaps most (IoU ≥ `min_iou`), else to a new
+    /// tentative track. Returns, for each live track, whether it took an estimate.
+    fn take_estimates(&mut self, frame: Frame, estimates: &[Estimate]) -> Vec<bool> {
+        let live = &mut self.live;
         let mut updated = vec![false; live.len()];
         let mut unmatched = Vec::new();
-        for e in &step.estimates {
+        for e in estimates {
             match live
                 .iter()
                 .enumerate()
@@ -125,7 +176,7 @@ pub(super) fn track_boxes_phd(
                 .enumerate()
                 .filter(|(i, _)| !updated[*i])
                 .map(|(i, t)| (i, predicted(t, frame).iou(&e.bbox)))
-                .filter(|&(_, iou)| iou >= labels.min_iou)
+                .filter(|&(_, iou)| iou >= self.labels.min_iou)
                 .max_by(|a, b| a.1.total_cmp(&b.1));
             match best {
                 Some((i, _)) => {
@@ -149,12 +200,20 @@ pub(super) fn track_boxes_phd(
                 }
             }
         }
-        let mut kept = Vec::with_capacity(live.len());
-        for (mut t, up) in live.drain(..).zip(updated) {
+        updated
+    }
+
+    /// After a frame: confirms the tentative tracks with enough hits (and drops those past
+    /// their window), and keeps a missed confirmed track, coasted on its own prediction, while
+    /// its label holds its share of the PHD mass and it has not missed too many frames.
+    fn manage(&mut self, frame: Frame, updated: Vec<bool>, mass: &LabelMasses) {
+        let (config, labels) = (self.config, self.labels);
+        let mut kept = Vec::with_capacity(self.live.len());
+        for (mut t, up) in self.live.drain(..).zip(updated) {
             if t.id.is_none() {
                 if t.hits >= labels.confirm_hits {
-                    t.id = Some(next_id);
-                    next_id += 1;
+                    t.id = Some(self.next_id);
+                    self.next_id += 1;
                 } else if frame - t.first + 1 >= labels.confirm_window {
                     continue;
                 }
@@ -176,7 +235,7 @@ pub(super) fn track_boxes_phd(
                 && label_mass.is_none_or(|m| m >= labels.min_mass * expected);
             if !alive {
                 if t.id.is_some() {
-                    done.push(t);
+                    self.done.push(t);
                 }
                 continue;
             }
@@ -189,42 +248,23 @@ pub(super) fn track_boxes_phd(
             t.coasted += 1;
             kept.push(t);
         }
-        *live = kept;
-        Ok(())
-    };
-    // The frames run on a thread of rayon's pool, so that the filter's parallel passes fork
-    // from inside the pool. Called from outside it, each pass was handed to the pool and
-    // waited for, a sleep and a wake-up of this thread per pass, which cost more than the
-    // second thread saved: on the realistic files of `mot-realistic` the PHD tracker took
-    // about 0.21 ms per frame that way and 0.15 this way (2 threads, load ≈ 3). The output is
-    // the same either way: no result depends on the threads.
-    rayon::scope(|_| -> Result<()> {
-        for (&frame, boxes) in &by_frame {
-            let frames = match previous {
-                Some(prev) => {
-                    let frames = u64::from(frame) - u64::from(prev);
-                    if frames > 1 {
-                        coast_through_gap(prev, frames - 1, &phd, &mut live, &mut done, settings)?;
-                    }
-                    frames
-                }
-                None => 1,
-            };
-            step_frame(frame, frames, boxes, &mut phd, &mut live, &mut done)?;
-            previous = Some(frame);
-        }
-        Ok(())
-    })?;
-    done.extend(live.into_iter().filter(|t| t.id.is_some()));
-    let mut tracks = Vec::with_capacity(done.len());
-    for mut t in done {
-        let n = t.points.len() - t.coasted;
-        t.points.truncate(n);
-        if let Some(id) = t.id {
-            tracks.push(Track::from_points(TrackId(id), t.points)?);
-        }
+        self.live = kept;
     }
-    Ok(TrackSet::from_tracks(tracks)?)
+
+    /// The confirmed tracks, each without the coasted frames after its last estimate.
+    fn finish(self) -> Result<TrackSet> {
+        let mut done = self.done;
+        done.extend(self.live.into_iter().filter(|t| t.id.is_some()));
+        let mut tracks = Vec::with_capacity(done.len());
+        for mut t in done {
+            let n = t.points.len() - t.coasted;
+            t.points.truncate(n);
+            if let Some(id) = t.id {
+                tracks.push(Track::from_points(TrackId(id), t.points)?);
+            }
+        }
+        Ok(TrackSet::from_tracks(tracks)?)
+    }
 }
 
 /// A PHD track takes an estimate: coasted points stay (they were output), velocity from the

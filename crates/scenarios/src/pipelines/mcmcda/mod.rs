@@ -18,8 +18,9 @@
 use anyhow::Result;
 use eval_metrics::{OspaConfig, association_scores, gospa_over_time};
 use mcmcda::{
-    McmcdaConfig, NearestNeighbourConfig, Partition, Problem, greedy_initial_partition,
-    measurement_labels, nearest_neighbour_tracks, run_chains, smoothed_tracks, tracks_by_origin,
+    McmcdaConfig, NearestNeighbourConfig, Problem,
+    chain::{Partition, greedy_initial_partition, run_chains},
+    measurement_labels, nearest_neighbour_tracks, smoothed_tracks, tracks_by_origin,
 };
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
