@@ -47,20 +47,23 @@ impl Tracker for OnlineTracker {
     }
 }
 
-/// The scans as a [`Problem`] (built by `empty`, with or without neighbourhood lists).
-fn problem_of(
+/// The scans as a [`Problem`] (built by `empty`, with or without neighbourhood lists),
+/// associated by `associate` and smoothed ([`smoothed_tracks`], ids from 1); no scan, no track.
+fn associate_and_smooth(
     model: &Model,
     scans: &[FrameDetections],
     empty: fn(&Model, Frame) -> Problem,
-) -> Result<Option<Problem>> {
+    associate: impl FnOnce(&Problem) -> Result<Vec<Vec<crate::MeasId>>>,
+) -> Result<TrackSet> {
     let Some(first) = scans.first() else {
-        return Ok(None);
+        return Ok(TrackSet::new());
     };
     let mut problem = empty(model, first.frame);
     for scan in scans {
         problem.push_scan(scan.frame, &positions(&scan.detections))?;
     }
-    Ok(Some(problem))
+    let tracks = associate(&problem)?;
+    smoothed_tracks(model, &problem, &tracks, 1)
 }
 
 /// Offline multi-scan MCMCDA ([`batch_mcmcda`]) over the whole window, tracks smoothed
@@ -77,11 +80,9 @@ impl BatchTracker for BatchMcmcda {
     type Error = Error;
 
     fn track(&mut self, scans: &[FrameDetections]) -> Result<TrackSet> {
-        let Some(problem) = problem_of(&self.model, scans, Problem::empty)? else {
-            return Ok(TrackSet::new());
-        };
-        let run = batch_mcmcda(&self.model, &problem, &self.config)?;
-        smoothed_tracks(&self.model, &problem, &run.tracks, 1)
+        associate_and_smooth(&self.model, scans, Problem::empty, |problem| {
+            Ok(batch_mcmcda(&self.model, problem, &self.config)?.tracks)
+        })
     }
 }
 
@@ -99,12 +100,14 @@ impl BatchTracker for Gnn {
     type Error = Error;
 
     fn track(&mut self, scans: &[FrameDetections]) -> Result<TrackSet> {
-        let Some(problem) = problem_of(&self.model, scans, Problem::without_neighbourhoods)? else {
-            return Ok(TrackSet::new());
-        };
-        let tracks =
-            nearest_neighbour_tracks(&self.model, &problem, problem.all_scans()?, &self.config)?;
-        smoothed_tracks(&self.model, &problem, &tracks, 1)
+        associate_and_smooth(
+            &self.model,
+            scans,
+            Problem::without_neighbourhoods,
+            |problem| {
+                nearest_neighbour_tracks(&self.model, problem, problem.all_scans()?, &self.config)
+            },
+        )
     }
 }
 

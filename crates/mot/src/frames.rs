@@ -241,8 +241,16 @@ mod tests {
         }
     }
 
-    fn error_of(r: Result<TrackSet>) -> Error {
-        r.unwrap_err()
+    /// The error of the fused tracker on `rows` and the folder `dir`, default settings.
+    fn error_of(dir: &Path, rows: &[MotRow]) -> Error {
+        track_frames(
+            dir,
+            rows,
+            &TrackConfig::default(),
+            &FusedSettings::default(),
+            0,
+        )
+        .unwrap_err()
     }
 
     fn a_box() -> BoundingBox {
@@ -252,13 +260,7 @@ mod tests {
     #[test]
     fn a_missing_folder_is_an_error() {
         let dir = std::env::temp_dir().join("track_frames_no_such_folder_7f3a");
-        let err = error_of(track_frames(
-            &dir,
-            &[det(1, a_box())],
-            &TrackConfig::default(),
-            &FusedSettings::default(),
-            0,
-        ));
+        let err = error_of(&dir, &[det(1, a_box())]);
         assert!(
             matches!(err, Error::Frames(sensors_video::Error::Io { .. })),
             "{err}"
@@ -291,13 +293,7 @@ mod tests {
     fn a_folder_without_images_is_an_error() {
         let dir = temp_dir("empty");
         std::fs::write(dir.join("notes.txt"), "not an image").unwrap();
-        let err = error_of(track_frames(
-            &dir,
-            &[det(1, a_box())],
-            &TrackConfig::default(),
-            &FusedSettings::default(),
-            0,
-        ));
+        let err = error_of(&dir, &[det(1, a_box())]);
         assert!(
             matches!(&err, Error::Frames(sensors_video::Error::EmptySequence { path }) if path == &dir),
             "{err}"
@@ -318,13 +314,7 @@ mod tests {
             det(5, a_box()),
             det(9, a_box()),
         ];
-        let err = error_of(track_frames(
-            &dir,
-            &rows,
-            &TrackConfig::default(),
-            &FusedSettings::default(),
-            0,
-        ));
+        let err = error_of(&dir, &rows);
         assert!(
             matches!(&err, Error::FrameWithoutImage { frame: 5, count: 2, dir: d } if d == &dir),
             "{err}"
@@ -338,13 +328,7 @@ mod tests {
         sensors_video::io::write_image(&grey(32, 24), &dir.join("000001.png")).unwrap();
         sensors_video::io::write_image(&grey(32, 24), &dir.join("000002.png")).unwrap();
         sensors_video::io::write_image(&grey(40, 24), &dir.join("000003.png")).unwrap();
-        let err = error_of(track_frames(
-            &dir,
-            &[det(1, a_box())],
-            &TrackConfig::default(),
-            &FusedSettings::default(),
-            0,
-        ));
+        let err = error_of(&dir, &[det(1, a_box())]);
         assert!(
             matches!(&err, Error::Frames(sensors_video::Error::SizeMismatch {
                 path,
@@ -364,13 +348,7 @@ mod tests {
         let mut bytes = b"\x89PNG\r\n\x1a\n".to_vec();
         bytes.extend_from_slice(&[7u8; 40]);
         std::fs::write(dir.join("000002.png"), &bytes).unwrap();
-        let err = error_of(track_frames(
-            &dir,
-            &[det(1, a_box())],
-            &TrackConfig::default(),
-            &FusedSettings::default(),
-            0,
-        ));
+        let err = error_of(&dir, &[det(1, a_box())]);
         assert!(
             matches!(&err, Error::Frames(sensors_video::Error::Image { path, .. }) if path == &dir.join("000002.png")),
             "{err}"

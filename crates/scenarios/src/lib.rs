@@ -56,7 +56,9 @@ mod pipelines;
 mod report;
 mod stats;
 
-pub use report::{Axes, BAR_WIDTH, Chart, Figure, Section, Series, Style, Table, YAxis, fmt_num};
+pub use report::{
+    Axes, BAR_WIDTH, Chart, Figure, Section, Series, Style, Table, YAxis, fill, fmt_num,
+};
 
 /// Metric name → value, sorted so that expected files diff cleanly.
 pub type Metrics = BTreeMap<String, f64>;

@@ -178,3 +178,21 @@ pub fn fmt_num(v: f64) -> String {
         format!("{v:.3e}")
     }
 }
+
+/// A report text from a template: every `{name}` of `template` replaced by its value (report
+/// prose lives in text files beside its pipeline, not in long string literals). A placeholder
+/// without a value, or a value without its placeholder, is a bug in the pipeline, caught in
+/// debug builds.
+pub fn fill(template: &str, values: &[(&str, String)]) -> String {
+    let mut out = template.to_string();
+    for (name, value) in values {
+        let key = format!("{{{name}}}");
+        debug_assert!(out.contains(&key), "the template has no {key}");
+        out = out.replace(&key, value);
+    }
+    debug_assert!(
+        !out.contains('{') || !out.contains('}'),
+        "a placeholder of the template has no value: {out}"
+    );
+    out
+}

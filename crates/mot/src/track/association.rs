@@ -78,7 +78,7 @@ pub(super) fn track_points(
 /// posterior's d̄ (whose (1 − p_d)^g term treats the misses of an occlusion as independent).
 fn link_tracklets(
     tracks: Vec<Vec<MeasId>>,
-    detections: &[MotRow],
+    detections: &Detections,
     model: &McmcdaConfig,
     max_gap: u32,
 ) -> Vec<Vec<MeasId>> {
@@ -128,7 +128,7 @@ const LINK_GATE: f64 = 9.21;
 type TrackEnd = (Frame, Vec2, Vec2, f64);
 
 /// The start (`at_end` false) or end of the track `meas`.
-fn end_state(meas: &[MeasId], detections: &[MotRow], at_end: bool) -> TrackEnd {
+fn end_state(meas: &[MeasId], detections: &Detections, at_end: bool) -> TrackEnd {
     let k = meas.len().min(8);
     let part = if at_end {
         &meas[meas.len() - k..]
@@ -138,7 +138,7 @@ fn end_state(meas: &[MeasId], detections: &[MotRow], at_end: bool) -> TrackEnd {
     let pts: Vec<(f64, Vec2)> = part
         .iter()
         .map(|&m| {
-            let d = &detections[m as usize];
+            let d = detections.of(m);
             (f64::from(d.frame), d.bbox.centre())
         })
         .collect();
@@ -158,7 +158,7 @@ fn end_state(meas: &[MeasId], detections: &[MotRow], at_end: bool) -> TrackEnd {
     } else {
         meas[0]
     };
-    let d = &detections[m as usize];
+    let d = detections.of(m);
     // The fitted line's value at the end frame.
     let c = cm + v * (f64::from(d.frame) - tm);
     (d.frame, c, v, d.bbox.height)
@@ -236,7 +236,7 @@ fn chosen_links(n: usize, pairs: &[(usize, usize, f64)]) -> Option<Vec<Option<us
 /// initiating detections, as the peer's trackers do): causal up to confirmation, since whether
 /// a track is output at all is decided by its M-of-N confirmation, which may come after f.
 fn gnn_online_output(
-    detections: &[MotRow],
+    detections: &Detections,
     tracks: &[Vec<MeasId>],
     boxes: &BoxConfig,
     coast: u32,
@@ -305,14 +305,14 @@ fn track_online(
 ) -> Result<TrackSet> {
     let first = by_frame.keys().next().copied().unwrap_or(0);
     let mut online = OnlineTracker::new(model.clone(), first, settings.online, seed)?;
-    let mut detections: Vec<MotRow> = Vec::new();
+    let mut detections = Detections::new();
     let mut out: std::collections::BTreeMap<u64, Vec<TrackPoint>> = Default::default();
     // The frames run on a thread of rayon's pool, so that the window's chains (`[online]
     // chains`) fork from inside it rather than wait for the pool to wake up at every frame
     // (like the PHD tracker's frames, track/phd.rs). No result depends on the threads.
     rayon::scope(|_| -> Result<()> {
         for (&frame, dets) in by_frame {
-            detections.extend_from_slice(dets);
+            detections.extend(dets);
             let step = online.push_scan_scored(
                 frame,
                 &centres(dets),
@@ -327,7 +327,7 @@ fn track_online(
                 let dets: Vec<(Frame, BoundingBox)> = meas
                     .iter()
                     .map(|&m| {
-                        let d = &detections[m as usize];
+                        let d = detections.of(m);
                         (d.frame, d.bbox)
                     })
                     .collect();

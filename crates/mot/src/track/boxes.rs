@@ -4,10 +4,13 @@ use super::*;
 
 /// A track's (frame, box) pairs from its measurement ids (indices into `detections`, which
 /// `problem_of` orders by id).
-pub(super) fn detection_boxes(detections: &[MotRow], meas: &[MeasId]) -> Vec<(Frame, BoundingBox)> {
+pub(super) fn detection_boxes(
+    detections: &Detections,
+    meas: &[MeasId],
+) -> Vec<(Frame, BoundingBox)> {
     meas.iter()
         .map(|&m| {
-            let d = &detections[m as usize];
+            let d = detections.of(m);
             (d.frame, d.bbox)
         })
         .collect()

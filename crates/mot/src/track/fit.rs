@@ -5,14 +5,44 @@ use super::*;
 /// Detections by frame.
 type ByFrame = std::collections::BTreeMap<Frame, Vec<MotRow>>;
 
-/// Detections in measurement-id order, by frame (file order within a frame; MCMCDA's
-/// measurement ids follow this order).
-pub(super) fn detections_by_frame(rows: &[MotRow]) -> (Vec<MotRow>, ByFrame) {
+/// A file's detections by MCMCDA measurement id: frame by frame, file order within a frame,
+/// the order in which [`problem_of`] pushes them, so the problem's id of each is its place.
+pub(super) struct Detections(Vec<MotRow>);
+
+impl Detections {
+    /// None yet, for a problem grown frame by frame.
+    pub(super) fn new() -> Self {
+        Self(Vec::new())
+    }
+
+    /// A frame's detections, pushed to the problem in this order.
+    pub(super) fn extend(&mut self, frame: &[MotRow]) {
+        self.0.extend_from_slice(frame);
+    }
+
+    /// The detection the problem calls `m`.
+    pub(super) fn of(&self, m: MeasId) -> &MotRow {
+        &self.0[m as usize]
+    }
+
+    /// How many.
+    pub(super) fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// In id order.
+    pub(super) fn iter(&self) -> std::slice::Iter<'_, MotRow> {
+        self.0.iter()
+    }
+}
+
+/// The detections in measurement-id order, and by frame.
+pub(super) fn detections_by_frame(rows: &[MotRow]) -> (Detections, ByFrame) {
     let mut by_frame = ByFrame::new();
     for r in rows {
         by_frame.entry(r.frame).or_default().push(*r);
     }
-    let detections: Vec<MotRow> = by_frame.values().flatten().copied().collect();
+    let detections = Detections(by_frame.values().flatten().copied().collect());
     (detections, by_frame)
 }
 
@@ -25,7 +55,7 @@ pub(super) fn problem_of(
     rows: &[MotRow],
     scores: Option<&ScoreModel>,
     new: fn(&mcmcda::Model, Frame) -> Problem,
-) -> Result<(Vec<MotRow>, ByFrame, Problem)> {
+) -> Result<(Detections, ByFrame, Problem)> {
     let (detections, by_frame) = detections_by_frame(rows);
     let first = by_frame.keys().next().copied().unwrap_or(0);
     let mut problem = new(model, first);
@@ -115,9 +145,9 @@ struct Moments {
 }
 
 impl Moments {
-    fn of(confident: &[&Vec<MeasId>], problem: &Problem, detections: &[MotRow]) -> Self {
+    fn of(confident: &[&Vec<MeasId>], problem: &Problem, detections: &Detections) -> Self {
         let size = |m: MeasId| {
-            let b = detections[m as usize].bbox;
+            let b = detections.of(m).bbox;
             [b.width, b.height]
         };
         let mut s = Self {

@@ -42,7 +42,7 @@ mod phd;
 
 use association::track_points;
 use boxes::{detection_boxes, kernel_reach};
-use fit::{GAP_BOX_WIDTHS, centres, detections_by_frame, problem_of, score_ratios};
+use fit::{Detections, GAP_BOX_WIDTHS, centres, detections_by_frame, problem_of, score_ratios};
 use phd::{MAX_COAST_FRAMES, track_boxes_phd};
 
 pub use boxes::smooth_boxes;
