@@ -48,50 +48,20 @@ const HEIGHT: u32 = 520;
 /// Draws the chart into an SVG document: the plot, and its legend in a column to the right so
 /// that it never covers data. Legend samples are drawn exactly as their series.
 pub fn render(chart: &Chart) -> Result<String> {
-    let (axes, series) = (&chart.axes, &chart.series);
-    let labelled: Vec<&Series> = series.iter().filter(|s| !s.label.is_empty()).collect();
-    // Wide enough for the longest label (≈ 9 px a character at 16 px, after the 38 px sample).
-    let longest = labelled
+    let axes = &chart.axes;
+    let labelled: Vec<&Series> = chart
+        .series
         .iter()
-        .map(|s| s.label.chars().count())
-        .max()
-        .unwrap_or(0);
-    let legend_w = if labelled.is_empty() {
-        0
-    } else {
-        let text_w = u32::try_from(longest)
-            .unwrap_or(u32::MAX)
-            .saturating_mul(9)
-            .saturating_add(48);
-        LEGEND_W.max(text_w)
-    };
+        .filter(|s| !s.label.is_empty())
+        .collect();
     let mut svg = String::new();
     {
-        let root =
-            SVGBackend::with_string(&mut svg, (PLOT_W + legend_w, HEIGHT)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (PLOT_W + legend_width(&labelled), HEIGHT))
+            .into_drawing_area();
         let to_err = |e: &dyn std::fmt::Display| anyhow!("plot {:?}: {e}", axes.title);
         root.fill(&WHITE).map_err(|e| to_err(&e))?;
         let (plot_area, legend_area) = root.split_horizontally(PLOT_W);
-        // Bars stand on 0 and are BAR_WIDTH wide: the axes hold their feet and edges.
-        let bars = series.iter().filter(|s| s.style == Style::Bars);
-        let bar_x = bars.clone().flat_map(|s| {
-            s.points
-                .iter()
-                .flat_map(|p| [p.0 - BAR_WIDTH, p.0 + BAR_WIDTH])
-        });
-        let bar_feet = bars.flat_map(|s| s.points.first().map(|_| 0.0));
-        let (x0, x1) = range(
-            series
-                .iter()
-                .flat_map(|s| s.points.iter().map(|p| p.0))
-                .chain(bar_x),
-        );
-        let (y0, y1) = range(
-            series
-                .iter()
-                .flat_map(|s| s.points.iter().map(|p| p.1))
-                .chain(bar_feet),
-        );
+        let ((x0, x1), (y0, y1)) = data_ranges(&chart.series);
         let y_range = match chart.y_axis {
             YAxis::Up => y0..y1,
             YAxis::Down => y1..y0,
@@ -112,48 +82,107 @@ pub fn render(chart: &Chart) -> Result<String> {
             .bold_line_style(BLACK.mix(0.08))
             .draw()
             .map_err(|e| to_err(&e))?;
-        for s in series {
-            let (colour, width) = look(s);
-            match s.style {
-                Style::Line | Style::ThinLine | Style::Faint => plot.draw_series(LineSeries::new(
-                    s.points.iter().copied(),
-                    colour.stroke_width(width),
-                )),
-                Style::Markers => {
-                    plot.draw_series(s.points.iter().map(|&p| Circle::new(p, 2, colour.filled())))
-                }
-                Style::Bars => plot.draw_series(s.points.iter().map(|&(x, y)| {
-                    let half = BAR_WIDTH / 2.0;
-                    Rectangle::new([(x - half, 0.0), (x + half, y)], colour.filled())
-                })),
-            }
-            .map_err(|e| to_err(&e))?;
-        }
-        for (i, s) in labelled.iter().enumerate() {
-            let y = 48 + 22 * i as i32;
-            let (colour, width) = look(s);
-            match s.style {
-                Style::Markers => legend_area.draw(&Circle::new((19, y), 3, colour.filled())),
-                Style::Bars => {
-                    legend_area.draw(&Rectangle::new([(10, y - 6), (28, y + 6)], colour.filled()))
-                }
-                _ => legend_area.draw(&PathElement::new(
-                    vec![(8, y), (30, y)],
-                    colour.stroke_width(width),
-                )),
-            }
-            .map_err(|e| to_err(&e))?;
-            legend_area
-                .draw(&Text::new(
-                    s.label.clone(),
-                    (38, y - 7),
-                    ("sans-serif", 16).into_font(),
-                ))
-                .map_err(|e| to_err(&e))?;
-        }
+        draw_series(&mut plot, &chart.series).map_err(|e| to_err(&e))?;
+        draw_legend(&legend_area, &labelled).map_err(|e| to_err(&e))?;
         root.present().map_err(|e| to_err(&e))?;
     }
     Ok(svg)
+}
+
+/// The legend column's width: wide enough for the longest label (≈ 9 px a character at 16 px,
+/// after the 38 px sample), at least `LEGEND_W`; none without a label.
+fn legend_width(labelled: &[&Series]) -> u32 {
+    let longest = labelled
+        .iter()
+        .map(|s| s.label.chars().count())
+        .max()
+        .unwrap_or(0);
+    if labelled.is_empty() {
+        return 0;
+    }
+    let text_w = u32::try_from(longest)
+        .unwrap_or(u32::MAX)
+        .saturating_mul(9)
+        .saturating_add(48);
+    LEGEND_W.max(text_w)
+}
+
+/// The x and y ranges of every point; bars stand on 0 and are `BAR_WIDTH` wide, so the axes
+/// hold their feet and edges.
+fn data_ranges(series: &[Series]) -> ((f64, f64), (f64, f64)) {
+    let bars = series.iter().filter(|s| s.style == Style::Bars);
+    let bar_x = bars.clone().flat_map(|s| {
+        s.points
+            .iter()
+            .flat_map(|p| [p.0 - BAR_WIDTH, p.0 + BAR_WIDTH])
+    });
+    let bar_feet = bars.flat_map(|s| s.points.first().map(|_| 0.0));
+    let x = range(
+        series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0))
+            .chain(bar_x),
+    );
+    let y = range(
+        series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.1))
+            .chain(bar_feet),
+    );
+    (x, y)
+}
+
+type Plot<'a, 'b> = ChartContext<
+    'a,
+    SVGBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+type PlotError<'b> = DrawingAreaErrorKind<<SVGBackend<'b> as DrawingBackend>::ErrorType>;
+
+/// Every series in its style.
+fn draw_series<'b>(plot: &mut Plot<'_, 'b>, series: &[Series]) -> Result<(), PlotError<'b>> {
+    for s in series {
+        let (colour, width) = look(s);
+        match s.style {
+            Style::Line | Style::ThinLine | Style::Faint => plot.draw_series(LineSeries::new(
+                s.points.iter().copied(),
+                colour.stroke_width(width),
+            )),
+            Style::Markers => {
+                plot.draw_series(s.points.iter().map(|&p| Circle::new(p, 2, colour.filled())))
+            }
+            Style::Bars => plot.draw_series(s.points.iter().map(|&(x, y)| {
+                let half = BAR_WIDTH / 2.0;
+                Rectangle::new([(x - half, 0.0), (x + half, y)], colour.filled())
+            })),
+        }?;
+    }
+    Ok(())
+}
+
+/// The legend: each labelled series' sample, drawn as the series is, and its label.
+fn draw_legend<'b>(
+    area: &DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    labelled: &[&Series],
+) -> Result<(), PlotError<'b>> {
+    for (i, s) in labelled.iter().enumerate() {
+        let y = 48 + 22 * i as i32;
+        let (colour, width) = look(s);
+        match s.style {
+            Style::Markers => area.draw(&Circle::new((19, y), 3, colour.filled())),
+            Style::Bars => area.draw(&Rectangle::new([(10, y - 6), (28, y + 6)], colour.filled())),
+            _ => area.draw(&PathElement::new(
+                vec![(8, y), (30, y)],
+                colour.stroke_width(width),
+            )),
+        }?;
+        area.draw(&Text::new(
+            s.label.clone(),
+            (38, y - 7),
+            ("sans-serif", 16).into_font(),
+        ))?;
+    }
+    Ok(())
 }
 
 /// The colour and stroke width a series is drawn with (the legend uses the same).

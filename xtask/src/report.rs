@@ -319,49 +319,14 @@ fn write(
         if members.is_empty() {
             continue;
         }
-        let _ = write!(md, "# {title}\n\n");
-        if let Some(table) = headline_table(title, &members) {
-            headlines += &to_html(&table);
-            md += &to_markdown(&table);
-            md += "\n";
-        }
-        let file = format!("{slug}.html");
-        let _ = write!(
-            index,
-            "<li><a href=\"{file}\">{}</a><ul>",
-            html_escape(title)
-        );
-        let mut body = format!(
-            "<nav><a href=\"index.html\">← report index</a></nav>\n<h1>{}</h1>\n<ul>\n",
-            html_escape(title)
-        );
-
-        let mut sections = String::new();
-        for r in members {
-            let name = &r.scenario.name;
-            let heading = r
-                .output
-                .as_ref()
-                .map_or(name.as_str(), |o| o.section.title.as_str());
-            let _ = write!(
-                index,
-                "<li><a href=\"{file}#{name}\">{}</a></li>",
-                html_escape(heading)
-            );
-            let _ = writeln!(
-                body,
-                "<li><a href=\"#{name}\">{}</a></li>",
-                html_escape(heading)
-            );
-            let (html, text) = section(out_dir, r)?;
-            sections += &html;
-            md += &text;
-        }
-        index += "</ul></li>\n";
-        body += "</ul>\n";
-        fs::write(out_dir.join(&file), page(title, &(body + &sections)))
-            .with_context(|| format!("writing {file}"))?;
-        pages.push(file);
+        pages.push(write_paper(
+            out_dir,
+            (slug, title),
+            &members,
+            &mut index,
+            &mut md,
+            &mut headlines,
+        )?);
     }
     index += "</ul>\n";
     if !headlines.is_empty() {
@@ -375,4 +340,59 @@ fn write(
     .context("writing index.html")?;
     fs::write(out_dir.join("report.md"), md).context("writing report.md")?;
     Ok(pages)
+}
+
+/// One paper's page (`slug.html`, returned): its headline table, its sections in HTML, their
+/// entries in the index's contents, and their Markdown.
+fn write_paper(
+    out_dir: &Path,
+    (slug, title): (&str, &str),
+    members: &[&RunResult],
+    index: &mut String,
+    md: &mut String,
+    headlines: &mut String,
+) -> anyhow::Result<String> {
+    let _ = write!(md, "# {title}\n\n");
+    if let Some(table) = headline_table(title, members) {
+        *headlines += &to_html(&table);
+        *md += &to_markdown(&table);
+        *md += "\n";
+    }
+    let file = format!("{slug}.html");
+    let _ = write!(
+        index,
+        "<li><a href=\"{file}\">{}</a><ul>",
+        html_escape(title)
+    );
+    let mut body = format!(
+        "<nav><a href=\"index.html\">← report index</a></nav>\n<h1>{}</h1>\n<ul>\n",
+        html_escape(title)
+    );
+
+    let mut sections = String::new();
+    for r in members {
+        let name = &r.scenario.name;
+        let heading = r
+            .output
+            .as_ref()
+            .map_or(name.as_str(), |o| o.section.title.as_str());
+        let _ = write!(
+            index,
+            "<li><a href=\"{file}#{name}\">{}</a></li>",
+            html_escape(heading)
+        );
+        let _ = writeln!(
+            body,
+            "<li><a href=\"#{name}\">{}</a></li>",
+            html_escape(heading)
+        );
+        let (html, text) = section(out_dir, r)?;
+        sections += &html;
+        *md += &text;
+    }
+    *index += "</ul></li>\n";
+    body += "</ul>\n";
+    fs::write(out_dir.join(&file), page(title, &(body + &sections)))
+        .with_context(|| format!("writing {file}"))?;
+    Ok(file)
 }
