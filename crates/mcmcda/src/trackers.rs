@@ -131,7 +131,9 @@ pub struct JpdaTracker<M> {
     config: SingleScanConfig,
     association: JpdaAssociation,
     targets: Vec<Gaussian<4>>,
+    /// The frame of the priors, then of the last step.
     last: Frame,
+    stepped: bool,
     rng: ChaCha8Rng,
     tracks: Vec<Vec<TrackPoint>>,
 }
@@ -157,6 +159,7 @@ impl<M: TransitionModel<4>> JpdaTracker<M> {
             tracks: vec![Vec::new(); priors.len()],
             targets: priors,
             last: start,
+            stepped: false,
             rng: ChaCha8Rng::seed_from_u64(seed),
         })
     }
@@ -166,10 +169,11 @@ impl<M: TransitionModel<4>> Tracker for JpdaTracker<M> {
     type Error = Error;
 
     fn step(&mut self, frame: Frame, detections: &[Detection]) -> Result<Vec<TrackState>> {
-        if frame < self.last {
+        // The first step may be at the priors' frame; every later one is later.
+        if frame < self.last || (self.stepped && frame == self.last) {
             return Err(Error::Model(tracker_model::Error::InvalidParameter {
                 name: "frame",
-                reason: format!("{frame} is before the last frame stepped, {}", self.last),
+                reason: format!("{frame} is not after the last frame, {}", self.last),
             }));
         }
         let steps = frame - self.last;
@@ -187,6 +191,7 @@ impl<M: TransitionModel<4>> Tracker for JpdaTracker<M> {
         };
         self.targets = result.states;
         self.last = frame;
+        self.stepped = true;
         let mut states = Vec::with_capacity(self.targets.len());
         for (i, (target, track)) in self.targets.iter().zip(&mut self.tracks).enumerate() {
             let m = target.mean();

@@ -2,7 +2,8 @@
 //! file or a stream. Online trackers run as batch ones through [`tracker_model::Online`].
 
 use tracker_model::{
-    BatchTracker, Detection, FrameClock, FrameDetections, MotRow, TrackSet, scans_of,
+    BatchTracker, Detection, Frame, FrameClock, FrameDetections, MotRow, TrackSet, TrackState,
+    Tracker, scans_of,
 };
 
 use crate::error::{Error, Result};
@@ -57,4 +58,25 @@ where
 {
     let scans = scans_of(detections, clock)?;
     Ok(tracker.track(&scans)?)
+}
+
+/// Runs a frame-by-frame tracker on a stream of scans (frames in increasing order, e.g. read
+/// from a socket or a camera as they come): each scan is stepped as it arrives and its
+/// confirmed tracks' states handed to `on_step`; at the end of the stream the tracker
+/// finishes. Memory is the tracker's own, not the stream's.
+pub fn stream<T, I>(
+    tracker: &mut T,
+    scans: I,
+    mut on_step: impl FnMut(Frame, &[TrackState]),
+) -> Result<TrackSet>
+where
+    T: Tracker + ?Sized,
+    I: IntoIterator<Item = FrameDetections>,
+    Error: From<T::Error>,
+{
+    for scan in scans {
+        let states = tracker.step(scan.frame, &scan.detections)?;
+        on_step(scan.frame, &states);
+    }
+    Ok(tracker.finish()?)
 }

@@ -224,3 +224,51 @@ fn jpda_follows_the_targets_it_is_given_through_the_driver() {
     assert_eq!(tracks.len(), n);
     assert!(tracks.tracks().iter().all(|t| t.last_frame() == Some(last)));
 }
+
+#[test]
+fn a_stream_gives_the_batch_run_and_each_frames_states() {
+    // The same online tracker over the file as a stream of scans, then as one window.
+    let rows = rows();
+    let phd = PhdConfig::for_boxes(&boxes(&rows)).unwrap();
+    let scans = tracker_model::scans_of(&detections_of(&rows), None).unwrap();
+    let mut steps = 0;
+    let mut last_frame = 0;
+    let streamed = mot::driver::stream(
+        &mut PhdTracker::global_only(SmcPhd::new(phd, 4).unwrap()),
+        scans.clone(),
+        |frame, states| {
+            assert!(frame > last_frame || steps == 0);
+            assert!(states.iter().all(|s| s.point.frame == frame));
+            last_frame = frame;
+            steps += 1;
+        },
+    )
+    .unwrap();
+    assert_eq!(steps, scans.len());
+    let (batch, _) = track_and_score(
+        &mut Online(PhdTracker::global_only(SmcPhd::new(phd, 4).unwrap())),
+        &detections_of(&rows),
+    );
+    assert_eq!(streamed, batch);
+}
+
+#[test]
+fn a_frame_out_of_order_is_an_error_not_a_panic() {
+    let b = BoundingBox::new(10.0, 10.0, 20.0, 40.0).unwrap();
+    let mut phd = PhdTracker::global_only(SmcPhd::new(PhdConfig::default(), 1).unwrap());
+    tracker_model::Tracker::step(&mut phd, 5, &[Detection::boxed(1, 5, b)]).unwrap();
+    assert!(tracker_model::Tracker::step(&mut phd, 5, &[]).is_err());
+    assert!(tracker_model::Tracker::step(&mut phd, 3, &[]).is_err());
+    // A point detection is not a box.
+    let point = Detection::point(2, 6, tracker_model::Vec2::new(1.0, 2.0));
+    assert!(tracker_model::Tracker::step(&mut phd, 6, &[point]).is_err());
+    // Two detections with one id, and seconds without a clock, are input errors.
+    let twice = [Detection::boxed(7, 1, b), Detection::boxed(7, 2, b)];
+    assert!(tracker_model::scans_of(&twice, None).is_err());
+    let mut seconds = Detection::boxed(8, 1, b);
+    seconds.stamp = tracker_model::Stamp::Seconds(0.5);
+    assert!(tracker_model::scans_of(std::slice::from_ref(&seconds), None).is_err());
+    let clock = tracker_model::FrameClock::new(0.0, 0.25).unwrap();
+    let scans = tracker_model::scans_of(&[seconds], Some(&clock)).unwrap();
+    assert_eq!(scans[0].frame, 2);
+}

@@ -1005,3 +1005,55 @@ fn config_matrices_are_rows_and_the_flat_form_still_loads() {
         assert!(err.contains("2×2"), "{bad}: {err}");
     }
 }
+
+/// A tracker that reports one track per detection, at the detection, with the detection's id:
+/// enough to see what `Online` feeds a `Tracker` and in which order.
+struct Echo {
+    seen: Vec<(Frame, u64)>,
+}
+
+impl Tracker for Echo {
+    type Error = Error;
+
+    fn step(&mut self, frame: Frame, detections: &[Detection]) -> Result<Vec<TrackState>> {
+        self.seen.extend(detections.iter().map(|d| (frame, d.id.0)));
+        Ok(detections
+            .iter()
+            .map(|d| TrackState {
+                id: TrackId(d.id.0),
+                point: TrackPoint::at(frame, d.position()),
+            })
+            .collect())
+    }
+
+    fn finish(&mut self) -> Result<TrackSet> {
+        let tracks = self
+            .seen
+            .iter()
+            .map(|&(f, id)| Track::from_points(TrackId(id), vec![TrackPoint::at(f, Vec2::zeros())]))
+            .collect::<Result<Vec<_>>>()?;
+        TrackSet::from_tracks(tracks)
+    }
+}
+
+#[test]
+fn scans_group_by_frame_in_order_and_online_steps_each_once() {
+    let d = |id, frame| Detection::point(id, frame, Vec2::new(id as f64, 0.0));
+    // Out of frame order in the input; within a frame the input order is kept.
+    let input = [d(1, 7), d(2, 3), d(3, 7), d(4, 4_000_000_000), d(5, 3)];
+    let scans = scans_of(&input, None).unwrap();
+    let frames: Vec<Frame> = scans.iter().map(|s| s.frame).collect();
+    assert_eq!(frames, vec![3, 7, 4_000_000_000]);
+    let ids: Vec<Vec<u64>> = scans
+        .iter()
+        .map(|s| s.detections.iter().map(|d| d.id.0).collect())
+        .collect();
+    assert_eq!(ids, vec![vec![2, 5], vec![1, 3], vec![4]]);
+    let mut online = Online(Echo { seen: Vec::new() });
+    let tracks = online.track(&scans).unwrap();
+    assert_eq!(
+        online.0.seen,
+        vec![(3, 2), (3, 5), (7, 1), (7, 3), (4_000_000_000, 4)]
+    );
+    assert_eq!(tracks.len(), 5);
+}
