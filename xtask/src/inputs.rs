@@ -77,7 +77,7 @@ pub fn fuzz_wav(data: &[u8]) {
     let mut out = std::io::Cursor::new(Vec::new());
     match rec.write_wav(&mut out) {
         // A file can declare what WAV cannot store again (a byte rate over 32 bits).
-        Err(sensors_audio::AudioError::Unsupported(_)) => return,
+        Err(sensors_audio::Error::Unsupported(_)) => return,
         written => written.expect("a loaded recording writes"),
     }
     let back = sensors_audio::Recording::read_wav(std::io::Cursor::new(out.into_inner()), 0.0)

@@ -55,7 +55,7 @@ pub enum Error {
     Model(#[from] tracker_model::Error),
     /// An error from the audio crate (building reports from beamforms).
     #[error(transparent)]
-    Audio(#[from] sensors_audio::AudioError),
+    Audio(#[from] sensors_audio::Error),
     /// An error from the video crate (building nodes from cameras).
     #[error(transparent)]
     Video(#[from] sensors_video::Error),

@@ -18,30 +18,29 @@
 //!   cameras and an optional joint refinement ([`bundle_adjust`]);
 //! * [`umeyama`]: similarity alignment, for scoring against the truth.
 //!
-//! Two views of 30 random points, no noise:
+//! The step every camera pair runs: the relative pose of two cameras from points matched
+//! between their images (here exact, so the pose is recovered to rounding):
 //!
 //! ```
-//! use camnet::{EssentialConfig, Pose, estimate_relative_pose, project};
+//! use camnet::{EssentialConfig, Pose, angle_between_deg, estimate_relative_pose, project};
 //! use nalgebra::{Rotation3, Vector3};
-//! use rand::{RngExt, SeedableRng};
-//! use rand_chacha::ChaCha8Rng;
+//! use rand::SeedableRng;
 //!
-//! let mut rng = ChaCha8Rng::seed_from_u64(1);
-//! let truth = Pose {
-//!     rotation: Rotation3::from_euler_angles(0.1, -0.3, 0.05),
-//!     translation: Vector3::new(1.0, 0.2, -0.1).normalize(),
-//! };
-//! let (mut x1, mut x2) = (Vec::new(), Vec::new());
-//! for _ in 0..30 {
-//!     let p = Vector3::new(rng.random_range(-2.0..2.0), rng.random_range(-2.0..2.0), rng.random_range(4.0..8.0));
-//!     x1.push(project(&p).unwrap());
-//!     x2.push(project(&truth.apply(&p)).unwrap());
-//! }
+//! let rotation = Rotation3::from_euler_angles(0.1, -0.3, 0.05);
+//! let truth = Pose { rotation, translation: Vector3::new(1.0, 0.2, -0.1).normalize() };
+//! // Matched points (normalised: pixels through K⁻¹); here a scene seen by both cameras.
+//! let scene: Vec<_> =
+//!     (0..30).map(|i| Vector3::new(i % 6 - 3, i / 6 - 2, 4 + i % 7).cast::<f64>()).collect();
+//! let x1: Vec<_> = scene.iter().filter_map(project).collect();
+//! let x2: Vec<_> = scene.iter().filter_map(|p| project(&truth.apply(p))).collect();
+//! let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1); // RANSAC's draws
 //! let est = estimate_relative_pose(&x1, &x2, &EssentialConfig::default(), &mut rng)?;
 //! assert!(camnet::rotation_error_deg(&est.pose.rotation, &truth.rotation) < 1e-6);
-//! assert!(camnet::angle_between_deg(&est.pose.translation, &truth.translation) < 1e-6);
+//! assert!(angle_between_deg(&est.pose.translation, &truth.translation) < 1e-6); // up to scale
 //! # Ok::<(), camnet::Error>(())
 //! ```
+//!
+//! [`localise`] runs it on the image tracks of every pair of cameras and places the network.
 
 mod bundle;
 mod correspondence;

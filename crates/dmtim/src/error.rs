@@ -5,7 +5,8 @@ use thiserror::Error;
 /// Everything that can go wrong in a DMTIM run.
 #[derive(Debug, Error)]
 pub enum Error {
-    /// A parameter or shared check from tracker-model.
+    /// A parameter or shared check from tracker-model: a configuration value outside its
+    /// range is [`tracker_model::Error::InvalidParameter`].
     #[error(transparent)]
     Model(#[from] tracker_model::Error),
     /// The per-sensor tracker failed.
@@ -24,19 +25,12 @@ pub enum Error {
         /// What identity-mgmt reported.
         source: identity_mgmt::Error,
     },
-    /// A configuration value is invalid.
-    #[error("invalid {name}: {reason}")]
-    InvalidParameter {
-        /// The field.
-        name: &'static str,
-        /// Why.
-        reason: String,
-    },
 }
 
 /// Result with this crate's [`enum@Error`].
 pub type Result<T> = std::result::Result<T, Error>;
 
+/// A configuration value outside its range, as tracker-model's parameter checks report it.
 pub(crate) fn invalid(name: &'static str, reason: String) -> Error {
-    Error::InvalidParameter { name, reason }
+    Error::Model(tracker_model::Error::InvalidParameter { name, reason })
 }

@@ -12,7 +12,7 @@ use identity_mgmt::{BeliefMatrix, EntropyUnit, FusionConfig, IdentityId};
 use tracker_model::{TrackId, Vec2, assignment};
 
 use crate::config::{DmtimConfig, IdentityMode, ReadUpdate};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid};
 use crate::scene::{Observations, Read, TruthTarget};
 use crate::tracking::SensorFrame;
 
@@ -342,14 +342,14 @@ impl<'a> Inputs<'a> {
         let n_sensors = records.len();
         let sensors = &config.sensors;
         if sensors.len() != n_sensors || observations.scans.len() != n_sensors {
-            return Err(Error::InvalidParameter {
-                name: "records",
-                reason: format!(
+            return Err(invalid(
+                "records",
+                format!(
                     "{n_sensors} sensors' records, {} sensors configured, {} observed",
                     sensors.len(),
                     observations.scans.len()
                 ),
-            });
+            ));
         }
         let neighbours: Vec<Vec<usize>> = (0..n_sensors)
             .map(|s| {

@@ -29,29 +29,25 @@
 //! identity when it first appears (the papers' premise), to de-duplicate the centralised
 //! scan, and to score.
 //!
+//! An aircraft's identity, announced to the radar where it appears, carried on to the next:
+//!
 //! ```
 //! use dmtim::{DmtimConfig, SensorSpec, TruthTarget, manage_identities, observe, track_all};
 //! use identity_mgmt::IdentityId;
 //! use rand::SeedableRng;
-//! use tracker_model::Vec2;
+//! use tracker_model::{ConstantVelocity2, Vec2};
 //!
-//! let mut config = DmtimConfig::default();
-//! config.sensors = vec![SensorSpec { name: "A".into(), centre: [0.0, 0.0], range_m: 30.0 }];
-//! config.mcmcda.max_speed = 3.0;
-//! config.mcmcda.measurement_noise = nalgebra::Matrix2::identity() * 0.09;
-//! config.mcmcda.motion = tracker_model::ConstantVelocity2::mcmcda(1.0, 0.01)?;
-//! let truth = vec![TruthTarget::along(
-//!     IdentityId(1),
-//!     0,
-//!     &[Vec2::new(-10.0, 0.0), Vec2::new(10.0, 0.0)],
-//!     1.0,
-//! )?];
-//! let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
-//! let obs = observe(&truth, &config, 20, &mut rng)?;
-//! let records = track_all(&obs, &config, 1)?;
-//! let run = manage_identities(&records, &obs, &truth, &config)?;
-//! assert!(run.pooled_correct_fraction() > 0.9);
-//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! // Radars 30 m apart with 20 m ranges; aircraft 7 appears to the first, flies into the second.
+//! let radar = |x: f64| SensorSpec { name: format!("x{x}"), centre: [x, 0.0], range_m: 20.0 };
+//! let mut config = DmtimConfig { sensors: vec![radar(0.0), radar(30.0)], ..Default::default() };
+//! config.mcmcda.measurement_noise = nalgebra::Matrix2::identity() * 0.09; // σ = 0.3 m
+//! config.mcmcda.motion = ConstantVelocity2::mcmcda(1.0, 0.01)?; // metres and frames
+//! let flight = [Vec2::new(-15.0, 0.0), Vec2::new(45.0, 0.0)];
+//! let truth = [TruthTarget::along(IdentityId(7), 0, &flight, 1.0)?]; // 1 m a frame
+//! let obs = observe(&truth, &config, 60, &mut rand_chacha::ChaCha8Rng::seed_from_u64(1))?;
+//! let run = manage_identities(&track_all(&obs, &config, 1)?, &obs, &truth, &config)?;
+//! assert_eq!(run.final_beliefs[1].argmax()[0].identity, Some(IdentityId(7)));
+//! # Ok::<(), dmtim::Error>(())
 //! ```
 
 mod config;

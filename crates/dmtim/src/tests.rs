@@ -111,10 +111,12 @@ fn config_errors() {
     c.local_info.sensors = vec![9];
     assert!(matches!(
         c.check(),
-        Err(crate::Error::InvalidParameter {
-            name: "local_info.sensors",
-            ..
-        })
+        Err(crate::Error::Model(
+            tracker_model::Error::InvalidParameter {
+                name: "local_info.sensors",
+                ..
+            }
+        ))
     ));
     let mut c = config();
     c.sensors.clear();
@@ -660,7 +662,6 @@ fn clusters_link_chains_of_close_estimates() {
 #[test]
 fn config_checks_name_the_first_bad_field() {
     let name = |c: &DmtimConfig| match c.check() {
-        Err(crate::Error::InvalidParameter { name, .. }) => name,
         Err(crate::Error::Model(tracker_model::Error::InvalidParameter { name, .. })) => name,
         other => panic!("{other:?}"),
     };

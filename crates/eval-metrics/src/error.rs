@@ -23,17 +23,10 @@ impl fmt::Display for Side {
 /// What can go wrong when scoring.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {
-    /// An error from the shared model (bad boxes, tracks, parsing).
+    /// An error from the shared model (bad boxes, tracks, parsing), and a parameter outside
+    /// its valid range ([`tracker_model::Error::InvalidParameter`]).
     #[error(transparent)]
     Model(#[from] tracker_model::Error),
-    /// A parameter outside its valid range.
-    #[error("invalid {name}: {reason}")]
-    InvalidParameter {
-        /// The parameter.
-        name: &'static str,
-        /// What is wrong, with the value.
-        reason: String,
-    },
     /// IoU similarity on a point: IoU needs boxes on both sides.
     #[error(
         "IoU similarity needs boxes, but the {side} contains a point; use a distance similarity"
@@ -66,3 +59,8 @@ pub enum Error {
 
 /// Result with eval-metrics' [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// A parameter outside its valid range, as tracker-model's parameter checks report it.
+pub(crate) fn invalid_parameter(name: &'static str, reason: String) -> Error {
+    Error::Model(tracker_model::Error::InvalidParameter { name, reason })
+}

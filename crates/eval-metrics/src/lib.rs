@@ -18,56 +18,26 @@
 //! function that takes them. Optimal assignments come from `tracker_model::assignment` (the
 //! `lsap` crate, a port of SciPy's `linear_sum_assignment`).
 //!
-//! Two people walk for four frames; a tracker follows the first closely, loses the second in
-//! the last frame and reports one false box:
+//! Scoring a tracker's MOTChallenge output against the ground truth. Two people walk for four
+//! frames; the tracker follows the first closely, loses the second in the last frame and
+//! reports one false box:
 //!
 //! ```
-//! use std::collections::BTreeMap;
-//!
 //! use eval_metrics::{EvalConfig, evaluate};
-//! use tracker_model::{BoundingBox, Track, TrackId, TrackPoint, TrackSet};
+//! use tracker_model::{TrackSet, parse_mot};
 //!
-//! /// Rows of (frame, id, left, top, width, height) into tracks.
-//! fn tracks(rows: &[(u32, u64, f64, f64, f64, f64)]) -> Result<TrackSet, tracker_model::Error> {
-//!     let mut by_id: BTreeMap<u64, Vec<TrackPoint>> = BTreeMap::new();
-//!     for &(frame, id, left, top, width, height) in rows {
-//!         let bbox = BoundingBox::new(left, top, width, height)?;
-//!         by_id.entry(id).or_default().push(TrackPoint::boxed(frame, bbox));
-//!     }
-//!     let tracks = by_id
-//!         .into_iter()
-//!         .map(|(id, points)| Track::from_points(TrackId(id), points))
-//!         .collect::<Result<_, _>>()?;
-//!     TrackSet::from_tracks(tracks)
-//! }
-//!
-//! let truth = tracks(&[
-//!     (1, 1, 10.0, 50.0, 20.0, 40.0),
-//!     (2, 1, 14.0, 50.0, 20.0, 40.0),
-//!     (3, 1, 18.0, 50.0, 20.0, 40.0),
-//!     (4, 1, 22.0, 50.0, 20.0, 40.0),
-//!     (1, 2, 200.0, 60.0, 20.0, 40.0),
-//!     (2, 2, 196.0, 60.0, 20.0, 40.0),
-//!     (3, 2, 192.0, 60.0, 20.0, 40.0),
-//!     (4, 2, 188.0, 60.0, 20.0, 40.0),
-//! ])?;
-//! let estimates = tracks(&[
-//!     (1, 7, 11.0, 51.0, 20.0, 40.0),
-//!     (2, 7, 15.0, 51.0, 20.0, 40.0),
-//!     (3, 7, 19.0, 51.0, 20.0, 40.0),
-//!     (4, 7, 23.0, 51.0, 20.0, 40.0),
-//!     (1, 8, 200.0, 60.0, 20.0, 40.0),
-//!     (2, 8, 196.0, 60.0, 20.0, 40.0),
-//!     (3, 8, 192.0, 60.0, 20.0, 40.0),
-//!     (2, 9, 400.0, 300.0, 20.0, 40.0),
-//! ])?;
-//!
-//! // Matches at IoU ≥ 0.5: 7 of 8 true boxes found, 1 miss, 1 false box, no identity switch.
-//! let report = evaluate(&truth, &estimates, &EvalConfig::default())?;
-//! assert_eq!(report.clear.mota, 1.0 - (1.0 + 1.0) / 8.0);
-//! assert_eq!(report.identity.idf1, 2.0 * 7.0 / (2.0 * 7.0 + 1.0 + 1.0));
-//! // HOTA also weighs how well the boxes overlap and how long each identity is kept.
-//! assert!(report.hota.hota > 0.5 && report.hota.hota < report.identity.idf1);
+//! // gt.txt and res.txt as read from disk: frame,id,left,top,width,height.
+//! let gt = "1,1,10,50,20,40\n2,1,14,50,20,40\n3,1,18,50,20,40\n4,1,22,50,20,40\n\
+//!           1,2,200,60,20,40\n2,2,196,60,20,40\n3,2,192,60,20,40\n4,2,188,60,20,40\n";
+//! let res = "1,7,11,51,20,40\n2,7,15,51,20,40\n3,7,19,51,20,40\n4,7,23,51,20,40\n\
+//!            1,8,200,60,20,40\n2,8,196,60,20,40\n3,8,192,60,20,40\n2,9,400,300,20,40\n";
+//! let truth = TrackSet::from_mot_rows(&parse_mot(gt.as_bytes())?)?;
+//! let tracks = TrackSet::from_mot_rows(&parse_mot(res.as_bytes())?)?;
+//! let m = evaluate(&truth, &tracks, &EvalConfig::default())?;
+//! println!("MOTA {:.3} IDF1 {:.3} HOTA {:.3}", m.clear.mota, m.identity.idf1, m.hota.hota);
+//! // At IoU ≥ 0.5: 7 of 8 true boxes found, 1 miss, 1 false box, no identity switch.
+//! assert_eq!(m.clear.mota, 1.0 - (1.0 + 1.0) / 8.0);
+//! assert!(m.hota.hota > 0.5 && m.hota.hota < m.identity.idf1);
 //! # Ok::<(), eval_metrics::Error>(())
 //! ```
 

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 use tracker_model::{Frame, TrackSet, Vec2, ensure_positive};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid_parameter};
 
 /// Cut-off c and order p of OSPA and GOSPA; checked by [`OspaConfig::check`] in every
 /// function that takes one.
@@ -22,10 +22,10 @@ impl OspaConfig {
     pub fn check(&self) -> Result<()> {
         ensure_positive(self.cutoff, "OSPA cut-off c")?;
         if !(self.order.is_finite() && self.order >= 1.0) {
-            return Err(Error::InvalidParameter {
-                name: "OSPA order p",
-                reason: format!("{} must be finite and >= 1", self.order),
-            });
+            return Err(invalid_parameter(
+                "OSPA order p",
+                format!("{} must be finite and >= 1", self.order),
+            ));
         }
         Ok(())
     }

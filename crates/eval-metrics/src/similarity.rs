@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 use tracker_model::{BoundingBox, Location, Vec2, ensure_positive};
 
-use crate::error::{Error, Result, Side};
+use crate::error::{Error, Result, Side, invalid_parameter};
 
 /// The similarity of a truth/estimate pair.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -53,10 +53,10 @@ impl MatchConfig {
     /// Checks the threshold (in (0, 1]) and the distance scale (finite, > 0).
     pub fn check(&self) -> Result<()> {
         if !(self.threshold > 0.0 && self.threshold <= 1.0) {
-            return Err(Error::InvalidParameter {
-                name: "match threshold",
-                reason: format!("{} is outside (0, 1]", self.threshold),
-            });
+            return Err(invalid_parameter(
+                "match threshold",
+                format!("{} is outside (0, 1]", self.threshold),
+            ));
         }
         if let Similarity::Distance { zero_at } = self.similarity {
             ensure_positive(zero_at, "distance scale")?;

@@ -13,7 +13,7 @@
 use serde::{Deserialize, Serialize};
 use tracker_model::ensure_positive;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid_parameter};
 use crate::search::golden_section;
 
 /// Checks the samples of a method (`what`) that needs at least `min` of them.
@@ -346,12 +346,7 @@ fn gram_diag_scale(gram: &[[f64; 4]], i: usize, pivot: f64) -> f64 {
 
 /// Checks a cubic spline's knot vector.
 fn check_knots(knots: &[f64]) -> Result<()> {
-    let bad = |reason: String| {
-        Err(Error::InvalidParameter {
-            name: "knots",
-            reason,
-        })
-    };
+    let bad = |reason: String| Err(invalid_parameter("knots", reason));
     if knots.len() < 2 * (K + 1) {
         return bad(format!(
             "{} knots: a cubic spline needs at least 8",
@@ -431,19 +426,19 @@ impl GcvConfig {
             && self.log10_max.is_finite()
             && self.log10_min < self.log10_max)
         {
-            return Err(Error::InvalidParameter {
-                name: "log10_min, log10_max",
-                reason: format!(
+            return Err(invalid_parameter(
+                "log10_min, log10_max",
+                format!(
                     "[{}, {}] is not a finite, non-empty range",
                     self.log10_min, self.log10_max
                 ),
-            });
+            ));
         }
         if self.grid_points < 2 {
-            return Err(Error::InvalidParameter {
-                name: "grid_points",
-                reason: format!("{}: at least 2 are needed", self.grid_points),
-            });
+            return Err(invalid_parameter(
+                "grid_points",
+                format!("{}: at least 2 are needed", self.grid_points),
+            ));
         }
         Ok(())
     }
@@ -642,10 +637,10 @@ impl SmoothingSpline {
     pub fn fit(times: &[f64], values: &[f64], lambda: f64) -> Result<Self> {
         check_samples(times, values, 3, "a smoothing spline")?;
         if !(lambda >= 0.0 && lambda.is_finite()) {
-            return Err(Error::InvalidParameter {
-                name: "lambda",
-                reason: format!("{lambda} must be finite and non-negative"),
-            });
+            return Err(invalid_parameter(
+                "lambda",
+                format!("{lambda} must be finite and non-negative"),
+            ));
         }
         let reinsch = Reinsch::new(times);
         Self::fit_with(times, values, &reinsch, lambda)

@@ -5,17 +5,10 @@ use tracker_model::Frame;
 /// What can go wrong recovering a gap or linking segments.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {
-    /// An error from the shared model (parameter ranges, covariances, Kalman filtering).
+    /// An error from the shared model (covariances, Kalman filtering), and a configuration
+    /// value or argument outside its range ([`tracker_model::Error::InvalidParameter`]).
     #[error(transparent)]
     Model(#[from] tracker_model::Error),
-    /// A configuration value or argument outside its range.
-    #[error("invalid {name}: {reason}")]
-    InvalidParameter {
-        /// The parameter's name as it appears in the API or configuration.
-        name: &'static str,
-        /// What is wrong with it, including the value.
-        reason: String,
-    },
     /// A track segment with too few observations for what is asked of it.
     #[error("a segment of {len} observations is too short: at least {min} are needed")]
     SegmentTooShort {
@@ -141,3 +134,9 @@ pub enum Error {
 
 /// Result with gdt-bridge's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// A configuration value or argument outside its range, as tracker-model's parameter checks
+/// report it.
+pub(crate) fn invalid_parameter(name: &'static str, reason: String) -> Error {
+    Error::Model(tracker_model::Error::InvalidParameter { name, reason })
+}

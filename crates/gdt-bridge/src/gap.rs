@@ -12,7 +12,7 @@ use crate::baselines::{
     BSpline, BSplineConfig, GcvConfig, SmoothingSpline, gap_knots, linear, lsq_bspline,
     natural_cubic_spline,
 };
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid_parameter};
 use crate::goal::{Goal, GoalDirected};
 use crate::link::end_state;
 
@@ -413,10 +413,10 @@ pub fn window_cv_errors(
         Baseline::WindowCubic(config) => (WindowKind::Cubic, config),
         Baseline::WindowBSpline(config) => (WindowKind::BSpline, config),
         _ => {
-            return Err(Error::InvalidParameter {
-                name: "method",
-                reason: format!("{method:?} has no window to cross-validate"),
-            });
+            return Err(invalid_parameter(
+                "method",
+                format!("{method:?} has no window to cross-validate"),
+            ));
         }
     };
     let frames = missing_frames(a, b)?;
@@ -468,13 +468,13 @@ fn choose_window(
 ) -> Result<usize> {
     let min = kind.min_per_side();
     if !config.candidates.iter().any(|&n| n >= min) {
-        return Err(Error::InvalidParameter {
-            name: "candidates",
-            reason: format!(
+        return Err(invalid_parameter(
+            "candidates",
+            format!(
                 "{:?}: the window fit needs a candidate of at least {min} observations per side",
                 config.candidates
             ),
-        });
+        ));
     }
     let errors = cv_errors(a, b, n_missing, kind, config);
     let mut best: Option<(usize, f64)> = None;

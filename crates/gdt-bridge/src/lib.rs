@@ -25,7 +25,8 @@
 //! Settings are checked once: [`GdtConfig::check`] gives the [`GdtModel`] the recovery
 //! functions take, [`LinkConfig::check`] the [`LinkModel`] of linking.
 //!
-//! A walker seen at frames 0-5 and 12-17, hidden in between:
+//! Filling the gap between two segments of a walker's track, seen at frames 0-5 and 12-17 and
+//! hidden in between:
 //!
 //! ```
 //! use gdt_bridge::{GdtConfig, Observation, recover_gdt};
@@ -36,22 +37,17 @@
 //!               (4, 22.1, 53.9), (5, 24.9, 55.0)];
 //! let after = [(12, 46.0, 62.1), (13, 49.1, 62.9), (14, 52.0, 64.0), (15, 54.9, 65.1),
 //!              (16, 58.0, 66.0), (17, 61.1, 66.9)];
-//! let observations = |points: &[(u32, f64, f64)]| -> Vec<Observation> {
-//!     points
-//!         .iter()
-//!         .map(|&(frame, x, y)| Observation { frame, position: Vec2::new(x, y) })
-//!         .collect()
+//! let observed = |rows: &[(u32, f64, f64)]| -> Vec<Observation> {
+//!     rows.iter().map(|&(frame, x, y)| Observation { frame, position: Vec2::new(x, y) }).collect()
 //! };
-//! let model = GdtConfig::default().check()?;
-//! let gap = recover_gdt(&observations(&before), &observations(&after), &model)?;
+//! let gap = recover_gdt(&observed(&before), &observed(&after), &GdtConfig::default().check()?)?;
 //! assert_eq!(gap.frames, (6..12).collect::<Vec<_>>());
-//! // The walker moves about (3, 1) pixels per frame: at frame 9 it is near (37, 58).
-//! let at_9 = gap.positions[3];
-//! assert!((at_9 - Vec2::new(37.0, 58.0)).norm() < 1.5, "{at_9:?}");
-//! // Each recovered position comes with its covariance.
-//! assert_eq!(gap.covariances.len(), gap.frames.len());
+//! // About (3, 1) pixels per frame: at frame 9 the walker is near (37, 58).
+//! assert!((gap.positions[3] - Vec2::new(37.0, 58.0)).norm() < 1.5);
 //! # Ok::<(), gdt_bridge::Error>(())
 //! ```
+//!
+//! Each recovered position comes with its covariance (`gap.covariances`).
 
 mod baselines;
 mod error;

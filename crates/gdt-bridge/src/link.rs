@@ -10,7 +10,7 @@
 use serde::{Deserialize, Serialize};
 use tracker_model::{Gaussian, ObservationModel, TransitionModel, ensure_positive};
 
-use crate::error::{Error, Result};
+use crate::error::{Result, invalid_parameter};
 use crate::gap::{GdtConfig, GdtModel, Observation};
 use crate::noise::filter_segment;
 
@@ -35,17 +35,17 @@ impl LinkConfig {
     pub fn check(&self) -> Result<LinkModel> {
         let model = self.model.check()?;
         if self.max_gap_frames == 0 {
-            return Err(Error::InvalidParameter {
-                name: "max_gap_frames",
-                reason: "0: no segment could continue another".into(),
-            });
+            return Err(invalid_parameter(
+                "max_gap_frames",
+                "0: no segment could continue another".into(),
+            ));
         }
         ensure_positive(self.max_speed, "max_speed")?;
         if !self.new_track_cost.is_finite() {
-            return Err(Error::InvalidParameter {
-                name: "new_track_cost",
-                reason: format!("{} must be finite", self.new_track_cost),
-            });
+            return Err(invalid_parameter(
+                "new_track_cost",
+                format!("{} must be finite", self.new_track_cost),
+            ));
         }
         Ok(LinkModel {
             config: *self,

@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 use tracker_model::{Gaussian, ObservationModel, TransitionModel};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid_parameter};
 use crate::gap::{GdtConfig, GdtModel, Observation, check_frames};
 use crate::search::golden_section;
 
@@ -92,10 +92,10 @@ impl NoiseSearch {
             ("accel_psd_range", self.accel_psd_range),
         ] {
             if !(lo > 0.0 && hi.is_finite() && lo < hi) {
-                return Err(Error::InvalidParameter {
+                return Err(invalid_parameter(
                     name,
-                    reason: format!("[{lo}, {hi}] must be a finite range of positive values"),
-                });
+                    format!("[{lo}, {hi}] must be a finite range of positive values"),
+                ));
             }
         }
         tracker_model::ensure_positive(
@@ -103,10 +103,10 @@ impl NoiseSearch {
             "initial_velocity_variance",
         )?;
         if self.grid_points < 2 {
-            return Err(Error::InvalidParameter {
-                name: "grid_points",
-                reason: format!("{}: at least 2 are needed", self.grid_points),
-            });
+            return Err(invalid_parameter(
+                "grid_points",
+                format!("{}: at least 2 are needed", self.grid_points),
+            ));
         }
         Ok(())
     }

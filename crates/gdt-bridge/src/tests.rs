@@ -614,8 +614,7 @@ fn oh_and_jungs_special_forms_agree_with_the_general_form() {
 #[test]
 fn settings_are_checked_once_and_name_the_bad_field() {
     let name = |r: Result<()>| match r {
-        Err(Error::InvalidParameter { name, .. })
-        | Err(Error::Model(tracker_model::Error::InvalidParameter { name, .. })) => name,
+        Err(Error::Model(tracker_model::Error::InvalidParameter { name, .. })) => name,
         other => panic!("expected an invalid parameter, got {other:?}"),
     };
     let gdt = |c: GdtConfig| name(c.check().map(|_| ()));
@@ -784,7 +783,10 @@ fn bspline_fits_that_the_data_cannot_determine_are_typed_errors() {
     let invalid = |knots: &[f64]| {
         matches!(
             BSpline::fit_lsq(&times, &values, &ones, knots),
-            Err(Error::InvalidParameter { name: "knots", .. })
+            Err(Error::Model(tracker_model::Error::InvalidParameter {
+                name: "knots",
+                ..
+            }))
         )
     };
     assert!(invalid(&[0.0, 0.0, 0.0, 29.0, 29.0, 29.0]));
@@ -934,7 +936,10 @@ fn smoothing_spline_limits_are_interpolation_and_the_least_squares_line() {
     assert_relative_eq!(s.edf(), 2.0, epsilon = 1e-5);
     assert!(matches!(
         SmoothingSpline::fit(&times, &y, -1.0),
-        Err(Error::InvalidParameter { name: "lambda", .. })
+        Err(Error::Model(tracker_model::Error::InvalidParameter {
+            name: "lambda",
+            ..
+        }))
     ));
     assert!(matches!(
         SmoothingSpline::fit(&times[..2], &y[..2], 1.0),
@@ -1010,10 +1015,10 @@ fn window_fits_choose_a_window_that_avoids_a_bend_seen_only_in_the_observations(
                 candidates: vec![2]
             })
         ),
-        Err(Error::InvalidParameter {
+        Err(Error::Model(tracker_model::Error::InvalidParameter {
             name: "candidates",
             ..
-        })
+        }))
     ));
 }
 
@@ -1102,10 +1107,10 @@ fn noise_is_estimated_by_maximum_likelihood() {
                 ..NoiseSearch::default()
             }
         ),
-        Err(Error::InvalidParameter {
+        Err(Error::Model(tracker_model::Error::InvalidParameter {
             name: "accel_psd_range",
             ..
-        })
+        }))
     ));
     assert_eq!(
         estimate_noise(&[&a[..1]], &NoiseSearch::default()),

@@ -3,7 +3,8 @@
 /// What can go wrong building or using a hidden Markov model.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Error {
-    /// An error from the shared model.
+    /// An error from the shared model, and a configuration value out of range
+    /// ([`tracker_model::Error::InvalidParameter`]).
     #[error(transparent)]
     Model(#[from] tracker_model::Error),
     /// A probability vector or matrix row is invalid.
@@ -76,15 +77,12 @@ pub enum Error {
     /// A grid operation on a state space built from a road graph.
     #[error("the state space is a road graph, not a cell grid")]
     NotAGrid,
-    /// A configuration value out of range.
-    #[error("invalid {name}: {reason}")]
-    InvalidParameter {
-        /// The parameter.
-        name: &'static str,
-        /// What is wrong.
-        reason: String,
-    },
 }
 
 /// Result with hmm-grid's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// A configuration value out of range, as tracker-model's parameter checks report it.
+pub(crate) fn invalid_parameter(name: &'static str, reason: String) -> Error {
+    Error::Model(tracker_model::Error::InvalidParameter { name, reason })
+}

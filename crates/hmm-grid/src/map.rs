@@ -9,7 +9,7 @@ use tracker_model::{
     Frame, Track, TrackId, TrackPoint, Vec2, ensure_non_negative, ensure_positive,
 };
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid_parameter};
 use crate::transitions::{Transitions, check_row};
 
 /// A rectangular grid of square cells, some blocked by obstacles; checked by
@@ -107,10 +107,10 @@ impl TryFrom<RawStateSpace> for StateSpace {
             .enumerate()
             .find(|(_, v)| v.iter().any(out_of_range))
         {
-            return Err(Error::InvalidParameter {
-                name: "neighbours",
-                reason: format!("state {i} lists a neighbour outside 0..{n}"),
-            });
+            return Err(invalid_parameter(
+                "neighbours",
+                format!("state {i} lists a neighbour outside 0..{n}"),
+            ));
         }
         if let Some(cells) = &raw.cells {
             if cells.states.len() != cells.n_cols * cells.n_rows {
@@ -121,10 +121,10 @@ impl TryFrom<RawStateSpace> for StateSpace {
                 });
             }
             if cells.states.iter().flatten().any(out_of_range) {
-                return Err(Error::InvalidParameter {
-                    name: "cells",
-                    reason: format!("a cell maps to a state outside 0..{n}"),
-                });
+                return Err(invalid_parameter(
+                    "cells",
+                    format!("a cell maps to a state outside 0..{n}"),
+                ));
             }
         }
         Ok(Self {
@@ -220,10 +220,10 @@ impl StateSpace {
         let mut neighbours = vec![Vec::new(); n];
         for &(a, b) in roads {
             if a >= n || b >= n || a == b {
-                return Err(Error::InvalidParameter {
-                    name: "road",
-                    reason: format!("({a}, {b}) must join two different crossroads among 0..{n}"),
-                });
+                return Err(invalid_parameter(
+                    "road",
+                    format!("({a}, {b}) must join two different crossroads among 0..{n}"),
+                ));
             }
             neighbours[a].push(b);
             neighbours[b].push(a);
@@ -280,28 +280,25 @@ impl StateSpace {
     /// path gives an empty track. Errors if a state is outside 0..N or the frames overflow.
     pub fn path_to_track(&self, path: &[usize], first_frame: Frame, id: TrackId) -> Result<Track> {
         let n = self.n_states();
-        let points = path
-            .iter()
-            .enumerate()
-            .map(|(t, &s)| {
-                if s >= n {
-                    return Err(Error::InvalidParameter {
-                        name: "state path",
-                        reason: format!("step {t} is state {s}, but the map has {n} states"),
-                    });
-                }
-                let frame = Frame::try_from(t)
+        let points =
+            path.iter()
+                .enumerate()
+                .map(|(t, &s)| {
+                    if s >= n {
+                        return Err(invalid_parameter(
+                            "state path",
+                            format!("step {t} is state {s}, but the map has {n} states"),
+                        ));
+                    }
+                    let frame = Frame::try_from(t)
                     .ok()
                     .and_then(|t| first_frame.checked_add(t))
-                    .ok_or_else(|| Error::InvalidParameter {
-                        name: "state path",
-                        reason: format!(
+                    .ok_or_else(|| invalid_parameter("state path", format!(
                             "step {t} after first frame {first_frame} overflows the frame index"
-                        ),
-                    })?;
-                Ok(TrackPoint::at(frame, self.positions[s]))
-            })
-            .collect::<Result<Vec<_>>>()?;
+                        )))?;
+                    Ok(TrackPoint::at(frame, self.positions[s]))
+                })
+                .collect::<Result<Vec<_>>>()?;
         Ok(Track::from_points(id, points)?)
     }
 

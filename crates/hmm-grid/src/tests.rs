@@ -858,7 +858,7 @@ fn state_paths_become_tracks() {
     assert!(space.path_to_track(&[], 0, TrackId(0)).unwrap().is_empty());
     let err = space.path_to_track(&[0, 3], 0, TrackId(0)).unwrap_err();
     assert!(
-        matches!(&err, Error::InvalidParameter { name: "state path", reason } if reason.contains("step 1 is state 3")),
+        matches!(&err, Error::Model(tracker_model::Error::InvalidParameter { name: "state path", reason }) if reason.contains("step 1 is state 3")),
         "{err}"
     );
     assert!(space.path_to_track(&[0, 0], u32::MAX, TrackId(0)).is_err());

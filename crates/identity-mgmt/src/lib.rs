@@ -26,22 +26,19 @@
 //! the rows keep their mass, to the Sinkhorn tolerance; a failed update leaves the matrix
 //! unchanged.
 //!
+//! Two aircraft cross; a transponder read then says which is which:
+//!
 //! ```
-//! use identity_mgmt::{BeliefMatrix, Continuation, EntropyUnit, IdentityId, ScalingConfig};
+//! use identity_mgmt::{BeliefMatrix, Continuation, IdentityId, ScalingConfig};
 //! use tracker_model::TrackId;
 //!
-//! // Two aircraft whose identities are known.
-//! let (a, b) = (IdentityId(1), IdentityId(2));
-//! let (t1, t2) = (TrackId(10), TrackId(20));
+//! // Aircraft 1 on track 10 and aircraft 2 on track 20, identities known.
+//! let (a, b, t1, t2) = (IdentityId(1), IdentityId(2), TrackId(10), TrackId(20));
 //! let mut beliefs = BeliefMatrix::known(&[(a, t1), (b, t2)])?;
-//! assert_eq!(beliefs.entropy(EntropyUnit::Nats), 0.0);
-//!
 //! // They cross; the tracker thinks a swap has probability 0.3.
-//! let m = Continuation::new(2, vec![0.7, 0.3, 0.3, 0.7])?;
-//! beliefs.mix(&[t1, t2], &m)?;
+//! beliefs.mix(&[t1, t2], &Continuation::new(2, vec![0.7, 0.3, 0.3, 0.7])?)?;
 //! assert!((beliefs.probability(a, t1)? - 0.7).abs() < 1e-12);
-//!
-//! // A transponder read says track 20 is aircraft 1.
+//! // A transponder read says track 20 is aircraft 1, so track 10 must be aircraft 2.
 //! let report = beliefs.incorporate_local_information(t2, &[1.0, 0.0], &ScalingConfig::default())?;
 //! assert!(report.entropy_after_nats < report.entropy_before_nats);
 //! assert!((beliefs.probability(b, t1)? - 1.0).abs() < 1e-9);

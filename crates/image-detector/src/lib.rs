@@ -20,31 +20,26 @@
 //! `ChaCha8Rng` stream from the factory's seed); scales are searched in parallel and reduced
 //! in order, so results do not depend on the thread count.
 //!
-//! A detector learns a red square on a grey background and finds it again after it moved:
+//! A detector learns an object from the tracker's box in one frame and finds it again in the
+//! next, after it moved:
 //!
 //! ```
-//! use std::sync::Arc;
 //! use image::{Rgb, RgbImage};
 //! use image_detector::{DetectorConfig, FrameFeed, ImageDetectors};
 //! use tracker_model::{BoundingBox, LocalDetector};
 //!
-//! let picture = |x0: u32| {
-//!     let mut im = RgbImage::from_pixel(160, 120, Rgb([90, 90, 90]));
-//!     for y in 40..80 {
-//!         for x in x0..x0 + 20 {
-//!             im.put_pixel(x, y, Rgb([200, 30, 30]));
-//!         }
-//!     }
-//!     Arc::new(im)
-//! };
+//! // Your frames (`image::open(path)?.to_rgb8()`); here a red square on grey, 4 px further right.
+//! let frame = |x0: u32| RgbImage::from_fn(160, 120, |x, y| {
+//!     Rgb(if (x0..x0 + 20).contains(&x) && (40..80).contains(&y) { [200, 30, 30] } else { [90; 3] })
+//! });
 //! let feed = FrameFeed::new();
-//! let mut factory = ImageDetectors::new(DetectorConfig::default(), feed.clone(), 7)?;
-//! feed.set(0, picture(60));
-//! let mut detector = factory.detector(0, &BoundingBox::new(60.0, 40.0, 20.0, 40.0)?)?;
-//! feed.set(1, picture(64));
+//! let mut detectors = ImageDetectors::new(DetectorConfig::default(), feed.clone(), 7)?;
+//! feed.set(0, frame(60).into()); // learn the object inside the tracker's box in frame 0
+//! let mut detector = detectors.detector(0, &BoundingBox::new(60.0, 40.0, 20.0, 40.0)?)?;
+//! feed.set(1, frame(64).into()); // search around where it was, in frame 1
 //! let found = detector.detect(1, &BoundingBox::new(60.0, 40.0, 20.0, 40.0)?).expect("found");
 //! assert!(found.iou(&BoundingBox::new(64.0, 40.0, 20.0, 40.0)?) > 0.7);
-//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! # Ok::<(), image_detector::Error>(())
 //! ```
 
 pub mod boost;

@@ -54,7 +54,7 @@ pub enum Error {
         /// The first frame still open.
         window_start: Frame,
     },
-    /// A measurement or a window reaches a scan that [`crate::Problem::forget_before`]
+    /// A measurement or a window reaches a scan that `Problem::forget_before`
     /// dropped.
     #[error("scan {scan} was forgotten: the problem keeps scans from {first_kept} on")]
     ScanForgotten {
@@ -162,7 +162,7 @@ pub enum Error {
         gap: usize,
     },
     /// A partition's cached posterior term disagrees with a fresh filter (a broken
-    /// invariant, reported by [`crate::Partition::check_invariants`]).
+    /// invariant, reported by [`crate::chain::Partition::check_invariants`]).
     #[error("track {track}: cached weight {cached} but fresh {fresh}")]
     StaleWeight {
         /// Index of the track.
@@ -173,7 +173,7 @@ pub enum Error {
         fresh: f64,
     },
     /// A partition's owner or slot map is wrong for a measurement (a broken invariant,
-    /// reported by [`crate::Partition::check_invariants`]).
+    /// reported by [`crate::chain::Partition::check_invariants`]).
     #[error("owner/slot map wrong for measurement {id}")]
     OwnerMapWrong {
         /// The measurement id.

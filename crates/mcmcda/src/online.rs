@@ -211,7 +211,7 @@ impl OnlineTracker {
         })
     }
 
-    /// The measurements received so far (from [`Problem::first_kept_scan`] on, once
+    /// The measurements received so far (from `Problem::first_kept_scan` on, once
     /// [`Self::drain_committed`] has forgotten older scans).
     pub fn problem(&self) -> &Problem {
         &self.problem

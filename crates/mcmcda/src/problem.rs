@@ -25,7 +25,7 @@ pub type MeasId = u32;
 /// Measurements can be added to any scan already present (late measurements), and their
 /// neighbourhood entries are added on both sides, so nothing is recomputed.
 ///
-/// A long-running (online) problem can drop its oldest scans with [`Problem::forget_before`],
+/// A long-running (online) problem can drop its oldest scans with `Problem::forget_before`,
 /// so that storage is proportional to the scans kept, not to the run's length. Measurement
 /// ids and scan indices stay what they were: ids keep counting from 0 in arrival order and
 /// scan index s is still frame `first_frame + s`. A forgotten measurement is no longer
@@ -91,8 +91,8 @@ impl Problem {
     /// neighbourhoods: what the nearest-neighbour baseline ([`crate::nearest_neighbour_tracks`])
     /// reads, without the cost of the lists (each holds the measurements of the d̄ scans on
     /// either side within reach of the measurement: at a 25 fps detection file's d̄ = 24
-    /// nearly every detection of 48 frames). [`Self::forward`] and [`Self::backward`] are
-    /// empty, and a [`crate::Partition`] of it (MCMCDA's chain, the greedy start) and
+    /// nearly every detection of 48 frames). `Self::forward` and `Self::backward` are
+    /// empty, and a [`crate::chain::Partition`] of it (MCMCDA's chain, the greedy start) and
     /// [`crate::reference::enumerate_partitions`] fail with [`Error::NoNeighbourhoods`].
     pub fn without_neighbourhoods(model: &Model, first_frame: Frame) -> Self {
         Self {
@@ -190,7 +190,7 @@ impl Problem {
 
     /// Adds one measurement to the existing scan at `frame` (a late measurement joins its own
     /// scan) and links it into the neighbourhoods. A frame whose scan was forgotten
-    /// ([`Self::forget_before`]) is refused with [`Error::ScanForgotten`].
+    /// (`Self::forget_before`) is refused with [`Error::ScanForgotten`].
     pub fn add_measurement(&mut self, frame: Frame, position: Vec2) -> Result<MeasId> {
         if !(position.x.is_finite() && position.y.is_finite()) {
             return Err(Error::Model(tracker_model::Error::NonFinite {
@@ -278,29 +278,10 @@ impl Problem {
     /// what the kept scans need. Ids, scan indices and frames keep their meaning; forgotten
     /// scans read as empty ([`Self::scan`], [`Self::nonempty_scans`]), forgotten ids are not
     /// [`Self::contains`]ed, windows must start at or after [`Self::first_kept_scan`]
-    /// ([`crate::Partition`] fails with [`Error::ScanForgotten`] otherwise) and
+    /// ([`crate::chain::Partition`] fails with [`Error::ScanForgotten`] otherwise) and
     /// measurements can no longer be added to forgotten scans. Forgetting is for good:
-    /// asking for an earlier scan than already forgotten does nothing.
-    ///
-    /// ```
-    /// use mcmcda::{McmcdaConfig, Problem};
-    /// use tracker_model::Vec2;
-    ///
-    /// let model = McmcdaConfig::default().check()?;
-    /// let mut problem = Problem::empty(&model, 100);
-    /// for frame in 100..110 {
-    ///     problem.push_scan(frame, &[Vec2::new(f64::from(frame), 0.0)])?;
-    /// }
-    /// problem.forget_before(8);
-    /// assert_eq!(problem.first_kept_scan(), 8);
-    /// assert_eq!(problem.kept_scans()?, 8..=9);
-    /// assert!(!problem.contains(7) && problem.contains(8));
-    /// // Ids and scan indices are unchanged: measurement 9 is still in scan 9, frame 109.
-    /// assert_eq!(problem.scan_of(9), 9);
-    /// assert_eq!(problem.n_measurements(), 10);
-    /// assert_eq!(problem.n_kept_measurements(), 2);
-    /// # Ok::<(), mcmcda::Error>(())
-    /// ```
+    /// asking for an earlier scan than already forgotten does nothing (tested by
+    /// `tests::a_problem_forgets_old_scans_and_keeps_ids_and_scan_indices`).
     pub(crate) fn forget_before(&mut self, scan: usize) {
         let scan = scan.min(self.n_scans);
         if scan <= self.scan_base {
@@ -351,13 +332,13 @@ impl Problem {
         shrink(&mut self.members);
     }
 
-    /// The first scan index not forgotten (0 unless [`Self::forget_before`] was called).
+    /// The first scan index not forgotten (0 unless `Self::forget_before` was called).
     pub(crate) fn first_kept_scan(&self) -> usize {
         self.scan_base
     }
 
     /// The scans kept, `first_kept_scan()..=n_scans() − 1`: the widest window a run can use
-    /// after [`Self::forget_before`] (the same as [`Self::all_scans`] before). Fails with
+    /// after `Self::forget_before` (the same as [`Self::all_scans`] before). Fails with
     /// [`Error::EmptyProblem`] when no scan is kept.
     pub fn kept_scans(&self) -> Result<RangeInclusive<usize>> {
         match self.n_scans {
@@ -574,7 +555,7 @@ impl Problem {
 
     /// The range of ids of the measurements of the scans `window` (forgotten and other
     /// scans' ids may lie inside it: late measurements take later ids), or `None` when
-    /// those scans hold no measurement. [`crate::Partition`] sizes its maps by it.
+    /// those scans hold no measurement. [`crate::chain::Partition`] sizes its maps by it.
     pub(crate) fn id_span(&self, window: RangeInclusive<usize>) -> Option<std::ops::Range<MeasId>> {
         let mut ids = self
             .nonempty_scans(window)

@@ -86,7 +86,7 @@ pub enum Error {
         /// The largest fitted log ratio of the file.
         best: f64,
     },
-    /// A tracker name that is not one of [`crate::TrackerKind::ALL`].
+    /// A tracker name that is not one of [`crate::track::TrackerKind::ALL`].
     #[error("unknown tracker {name:?}; known: mcmcda, mcmcda-online, gnn, gnn-online, phd")]
     UnknownTracker {
         /// The name given.

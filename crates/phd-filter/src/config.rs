@@ -8,7 +8,7 @@ use tracker_model::{
     BoundingBox, LN_2PI, ensure_in_range, ensure_open_probability, ensure_positive,
 };
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid_parameter};
 
 /// Box state [c_x, c_y, w, h, v_x, v_y].
 pub type BoxState = [f64; 6];
@@ -115,10 +115,10 @@ impl Motion {
 /// A filter step goes forward in time: `frames` (after the last step) must be at least 1.
 pub(crate) fn check_frames_after(frames: u64) -> crate::error::Result<()> {
     if frames == 0 {
-        return Err(crate::error::Error::InvalidParameter {
-            name: "frames",
-            reason: "0 frames after the last one; a step moves time forward".into(),
-        });
+        return Err(invalid_parameter(
+            "frames",
+            "0 frames after the last one; a step moves time forward".into(),
+        ));
     }
     Ok(())
 }
@@ -284,20 +284,20 @@ impl PhdConfig {
             ("max_particles", self.max_particles),
         ] {
             if count == 0 {
-                return Err(Error::InvalidParameter {
+                return Err(invalid_parameter(
                     name,
-                    reason: "0 particles; it must be at least 1".into(),
-                });
+                    "0 particles; it must be at least 1".into(),
+                ));
             }
         }
         if self.birth_particles > self.max_particles {
-            return Err(Error::InvalidParameter {
-                name: "birth_particles",
-                reason: format!(
+            return Err(invalid_parameter(
+                "birth_particles",
+                format!(
                     "{} exceeds max_particles = {}",
                     self.birth_particles, self.max_particles
                 ),
-            });
+            ));
         }
         ensure_positive(self.extraction_threshold, "extraction_threshold")?;
         ensure_in_range(self.label_min_share, 0.0, 1.0, "label_min_share")?;

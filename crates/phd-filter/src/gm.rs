@@ -10,7 +10,7 @@ use serde::{Deserialize, Serialize};
 use tracker_model::{BoundingBox, LN_2PI, ensure_non_negative};
 
 use crate::config::{Motion, PhdConfig, measurement_from_box, state_box};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid_parameter};
 use crate::smc::{Estimate, PhdStep};
 
 type Vec6 = SVector<f64, 6>;
@@ -37,10 +37,10 @@ impl GmConfig {
         ensure_non_negative(self.prune_below, "prune_below")?;
         ensure_non_negative(self.merge_distance, "merge_distance")?;
         if self.max_components == 0 {
-            return Err(Error::InvalidParameter {
-                name: "max_components",
-                reason: "0; the mixture must keep at least one component".into(),
-            });
+            return Err(invalid_parameter(
+                "max_components",
+                "0; the mixture must keep at least one component".into(),
+            ));
         }
         Ok(())
     }

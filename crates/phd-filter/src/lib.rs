@@ -18,30 +18,23 @@
 //! Configurations are checked when a filter or tracker is built ([`PhdConfig::check`],
 //! [`GmConfig::check`], [`FusionConfig::check`]) and trusted afterwards.
 //!
-//! Two people standing apart, detected in every frame, become two tracks:
+//! Tracking your detector's boxes frame by frame with the SMC-PHD filter alone:
 //!
 //! ```
 //! use phd_filter::{PhdConfig, PhdTracker, SmcPhd};
 //! use tracker_model::BoundingBox;
 //!
-//! // Each frame's detections as [left, top, width, height] in pixels: one person walks right,
-//! // the other left.
-//! let frames: Vec<Vec<[f64; 4]>> = (0..8)
-//!     .map(|t| {
-//!         let dx = 2.0 * f64::from(t);
-//!         vec![[100.0 + dx, 200.0, 40.0, 100.0], [400.0 - dx, 180.0, 45.0, 110.0]]
-//!     })
-//!     .collect();
 //! let mut tracker = PhdTracker::global_only(SmcPhd::new(PhdConfig::default(), 7)?);
-//! for (frame, detections) in (0..).zip(&frames) {
-//!     let boxes = detections
-//!         .iter()
-//!         .map(|&[left, top, width, height]| BoundingBox::new(left, top, width, height))
-//!         .collect::<Result<Vec<_>, _>>()?;
-//!     tracker.step(frame, &boxes)?;
+//! for frame in 0..8 {
+//!     // This frame's detections (left, top, width, height): two people walking apart.
+//!     let dx = 3.0 * f64::from(frame);
+//!     let person_1 = BoundingBox::new(100.0 - dx, 200.0, 40.0, 100.0)?;
+//!     let person_2 = BoundingBox::new(400.0 + dx, 180.0, 45.0, 110.0)?;
+//!     tracker.step(frame, &[person_1, person_2])?;
 //! }
 //! let tracks = tracker.tracks()?;
-//! assert_eq!(tracks.len(), 2);
+//! // One track per person, each followed to the last frame.
+//! assert!(tracks.len() == 2 && tracks.tracks().iter().all(|t| t.last_frame() == Some(7)));
 //! # Ok::<(), phd_filter::Error>(())
 //! ```
 

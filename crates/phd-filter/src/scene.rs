@@ -20,7 +20,7 @@ use tracker_model::{
     ensure_in_range, ensure_non_negative, ensure_positive,
 };
 
-use crate::error::{Error, Result};
+use crate::error::{Result, invalid_parameter};
 
 /// A pedestrian scene and its global detector.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -80,12 +80,10 @@ impl SceneConfig {
         ensure_in_range(self.speed[1], self.speed[0], f64::INFINITY, "speed")?;
         let [far, near] = self.ground_rows;
         if !(far.is_finite() && near.is_finite() && near > far) {
-            return Err(Error::InvalidParameter {
-                name: "ground_rows",
-                reason: format!(
-                    "[{far}, {near}]: the near row must be finite and below the far one"
-                ),
-            });
+            return Err(invalid_parameter(
+                "ground_rows",
+                format!("[{far}, {near}]: the near row must be finite and below the far one"),
+            ));
         }
         for h in self.heights {
             ensure_positive(h, "heights")?;
@@ -258,10 +256,8 @@ impl SceneConfig {
     pub fn simulate<R: Rng + ?Sized>(&self, rng: &mut R) -> Result<Scene> {
         self.check()?;
         let poisson = |rate: f64, name: &'static str| {
-            Poisson::new(rate.max(1e-12)).map_err(|e| Error::InvalidParameter {
-                name,
-                reason: format!("{rate}: {e}"),
-            })
+            Poisson::new(rate.max(1e-12))
+                .map_err(|e| invalid_parameter(name, format!("{rate}: {e}")))
         };
         let arrivals = poisson(self.arrivals_per_frame, "arrivals_per_frame")?;
         let false_positives = poisson(self.false_positives, "false_positives")?;

@@ -374,8 +374,7 @@ fn bad_settings_are_errors_that_name_the_parameter() {
     use crate::Error;
     use crate::scene::{LocalDetectorSim, SceneConfig};
     let named = |r: crate::Result<()>| match r {
-        Err(Error::InvalidParameter { name, .. })
-        | Err(Error::Model(tracker_model::Error::InvalidParameter { name, .. })) => name,
+        Err(Error::Model(tracker_model::Error::InvalidParameter { name, .. })) => name,
         other => panic!("expected an invalid parameter, got {other:?}"),
     };
     assert_eq!(PhdConfig::for_boxes(&[]), Err(Error::NoBoxes));
@@ -922,7 +921,9 @@ mod gaps {
         let mut f = SmcPhd::new(config(), 2).unwrap();
         assert!(matches!(
             f.step_after(0, &first),
-            Err(crate::Error::InvalidParameter { name: "frames", .. })
+            Err(crate::Error::Model(
+                tracker_model::Error::InvalidParameter { name: "frames", .. }
+            ))
         ));
     }
 }

@@ -9,7 +9,7 @@ use tracker_model::{
     TrackState,
 };
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, invalid_parameter};
 use crate::fusion::{DetectorBank, FusionConfig, fuse};
 use crate::smc::{Estimate, PhdStep};
 
@@ -183,21 +183,23 @@ impl<F: PhdFilter, D: LocalDetectorFactory> tracker_model::Tracker for PhdTracke
             None => 1,
             Some(last) if frame > last => u64::from(frame - last),
             Some(last) => {
-                return Err(Error::InvalidParameter {
-                    name: "frame",
-                    reason: format!("{frame} is not after the last frame stepped, {last}"),
-                });
+                return Err(invalid_parameter(
+                    "frame",
+                    format!("{frame} is not after the last frame stepped, {last}"),
+                ));
             }
         };
         let boxes = detections
             .iter()
             .map(|d| {
-                d.bbox().ok_or_else(|| Error::InvalidParameter {
-                    name: "detection",
-                    reason: format!(
-                        "detection {} is a point; the PHD filter tracks boxes",
-                        d.id.0
-                    ),
+                d.bbox().ok_or_else(|| {
+                    invalid_parameter(
+                        "detection",
+                        format!(
+                            "detection {} is a point; the PHD filter tracks boxes",
+                            d.id.0
+                        ),
+                    )
                 })
             })
             .collect::<Result<Vec<BoundingBox>>>()?;

@@ -16,10 +16,10 @@ use nalgebra::DMatrix;
 use realfft::num_complex::Complex;
 use realfft::{RealFftPlanner, RealToComplex};
 use serde::{Deserialize, Serialize};
-use tracker_model::{Error, Frame, FrameClock};
+use tracker_model::{Error as ModelError, Frame, FrameClock};
 
 use crate::array::{MicArray, SOUND_SPEED_MPS};
-use crate::error::{AudioError, Result};
+use crate::error::{Error, Result};
 use crate::interp::{bandpass_fir, fractional_taps};
 use crate::recording::{Recording, check_channels};
 use tracker_model::{BearingProfile, SensorPose};
@@ -355,18 +355,18 @@ impl BeamformConfig {
     /// Checks the parameters against `array` and precomputes filters and steering tables.
     pub fn check(&self, array: &MicArray) -> Result<Beamformer> {
         if self.sample_rate_hz == 0 {
-            return Err(AudioError::ZeroSampleRate);
+            return Err(Error::ZeroSampleRate);
         }
         let fs = f64::from(self.sample_rate_hz);
         if self.n_beams == 0 {
-            return Err(Error::InvalidParameter {
+            return Err(ModelError::InvalidParameter {
                 name: "n_beams",
                 reason: "must be at least 1".into(),
             }
             .into());
         }
         if self.hop == 0 {
-            return Err(Error::InvalidParameter {
+            return Err(ModelError::InvalidParameter {
                 name: "hop",
                 reason: "must be at least 1 sample".into(),
             }
@@ -377,7 +377,7 @@ impl BeamformConfig {
         tracker_model::ensure_in_range(lo, 0.0, fs / 2.0, "band_hz[0]")?;
         tracker_model::ensure_in_range(hi, 0.0, fs / 2.0, "band_hz[1]")?;
         if hi <= lo {
-            return Err(Error::InvalidParameter {
+            return Err(ModelError::InvalidParameter {
                 name: "band_hz",
                 reason: format!("[{lo}, {hi}]: the upper edge must exceed the lower"),
             }
@@ -397,12 +397,12 @@ impl BeamformConfig {
         let engine = match self.method {
             Method::TimeDomain => {
                 if self.weighting == Weighting::Phat {
-                    return Err(AudioError::Unsupported(
+                    return Err(Error::Unsupported(
                         "PHAT weighting needs the frequency-domain beamformer".into(),
                     ));
                 }
                 if self.fir_taps.is_multiple_of(2) {
-                    return Err(Error::InvalidParameter {
+                    return Err(ModelError::InvalidParameter {
                         name: "fir_taps",
                         reason: format!(
                             "{} must be odd (a linear-phase FIR with an integer delay)",
@@ -413,7 +413,7 @@ impl BeamformConfig {
                 }
                 let half = self.interp_half_width;
                 if half == 0 {
-                    return Err(Error::InvalidParameter {
+                    return Err(ModelError::InvalidParameter {
                         name: "interp_half_width",
                         reason: "must be at least 1".into(),
                     }
@@ -422,7 +422,7 @@ impl BeamformConfig {
                 let margin = max_adv.ceil() as usize + half;
                 let required = self.fir_taps + 2 * margin + spread.max(1);
                 if self.frame_len < required {
-                    return Err(AudioError::FrameTooShort {
+                    return Err(Error::FrameTooShort {
                         frame_len: self.frame_len,
                         required,
                     });
@@ -458,7 +458,7 @@ impl BeamformConfig {
             Method::FrequencyDomain | Method::Mvdr => {
                 let required = 2 * spread + 2;
                 if self.frame_len < required {
-                    return Err(AudioError::FrameTooShort {
+                    return Err(Error::FrameTooShort {
                         frame_len: self.frame_len,
                         required,
                     });
@@ -477,7 +477,7 @@ impl BeamformConfig {
                 let first_bin = (lo / df).ceil() as usize;
                 let last_bin = ((hi / df).floor() as usize).min(l / 2);
                 if last_bin < first_bin {
-                    return Err(Error::InvalidParameter {
+                    return Err(ModelError::InvalidParameter {
                         name: "band_hz",
                         reason: format!(
                             "[{lo}, {hi}] contains no FFT bin of a {l}-sample frame ({df} Hz apart)"
@@ -531,12 +531,12 @@ impl BeamformConfig {
     /// The MVDR engine on `freq`'s bins: checks α and ε and tabulates the manifolds.
     fn mvdr(&self, freq: FreqDomain, n_mics: usize) -> Result<Mvdr> {
         if freq.phat {
-            return Err(AudioError::Unsupported(
+            return Err(Error::Unsupported(
                 "PHAT weighting is for delay-and-sum; MVDR whitens by its covariance".into(),
             ));
         }
         if !(self.mvdr_forgetting.is_finite() && (0.0..1.0).contains(&self.mvdr_forgetting)) {
-            return Err(Error::InvalidParameter {
+            return Err(ModelError::InvalidParameter {
                 name: "mvdr_forgetting",
                 reason: format!("{}: it must lie in [0, 1)", self.mvdr_forgetting),
             }
@@ -600,7 +600,7 @@ impl Beamformer {
     pub fn beamform(&mut self, recording: &Recording) -> Result<Vec<Beamform>> {
         recording.check()?;
         if recording.sample_rate_hz != self.config.sample_rate_hz {
-            return Err(Error::InvalidParameter {
+            return Err(ModelError::InvalidParameter {
                 name: "sample_rate_hz",
                 reason: format!(
                     "the recording is sampled at {} Hz but the beamformer was configured for {} Hz",
@@ -610,7 +610,7 @@ impl Beamformer {
             .into());
         }
         if recording.n_channels() != self.n_mics {
-            return Err(AudioError::ChannelCountMismatch {
+            return Err(Error::ChannelCountMismatch {
                 expected: self.n_mics,
                 got: recording.n_channels(),
             });

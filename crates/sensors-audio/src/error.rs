@@ -3,7 +3,7 @@
 /// Everything that can go wrong in sensors-audio. Variants carry the offending values so that a
 /// user can fix the input without reading the source.
 #[derive(Debug, thiserror::Error)]
-pub enum AudioError {
+pub enum Error {
     /// A frame or recording with no channels at all.
     #[error("the input has no channels")]
     NoChannels,
@@ -60,5 +60,5 @@ pub enum AudioError {
     Model(#[from] tracker_model::Error),
 }
 
-/// Result with [`AudioError`].
-pub type Result<T, E = AudioError> = std::result::Result<T, E>;
+/// Result with [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;

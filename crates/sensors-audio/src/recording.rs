@@ -4,7 +4,7 @@ use std::io::{Read, Seek, Write};
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{AudioError, Result};
+use crate::error::{Error, Result};
 
 /// A multichannel recording: one `f32` vector per microphone, all the same length, sampled at
 /// `sample_rate_hz`; sample 0 was taken at `start_s` seconds of the sensor's clock (map it to
@@ -35,7 +35,7 @@ impl Recording {
     /// Checks the invariants [`Recording::new`] establishes (the fields are public).
     pub fn check(&self) -> Result<()> {
         if self.sample_rate_hz == 0 {
-            return Err(AudioError::ZeroSampleRate);
+            return Err(Error::ZeroSampleRate);
         }
         tracker_model::ensure_in_range(self.start_s, f64::MIN, f64::MAX, "start_s")?;
         let refs: Vec<&[f32]> = self.channels.iter().map(Vec::as_slice).collect();
@@ -64,7 +64,7 @@ impl Recording {
         let spec = wav.spec();
         let n_ch = usize::from(spec.channels);
         if n_ch == 0 {
-            return Err(AudioError::NoChannels);
+            return Err(Error::NoChannels);
         }
         let interleaved: Vec<f32> = match spec.sample_format {
             hound::SampleFormat::Float => wav.samples::<f32>().collect::<Result<_, _>>()?,
@@ -86,11 +86,11 @@ impl Recording {
     pub fn write_wav<W: Write + Seek>(&self, writer: W) -> Result<()> {
         self.check()?;
         let n_ch = u16::try_from(self.n_channels()).map_err(|_| {
-            AudioError::Unsupported(format!("{} channels exceed WAV's 65535", self.n_channels()))
+            Error::Unsupported(format!("{} channels exceed WAV's 65535", self.n_channels()))
         })?;
         // The header stores bytes per second in 32 bits (hound computes it unchecked).
         if u64::from(self.sample_rate_hz) * u64::from(n_ch) * 4 > u64::from(u32::MAX) {
-            return Err(AudioError::Unsupported(format!(
+            return Err(Error::Unsupported(format!(
                 "{} Hz × {n_ch} channels × 4 bytes per second overflow the WAV header's 32-bit \
                  byte rate",
                 self.sample_rate_hz
@@ -114,19 +114,19 @@ impl Recording {
 }
 
 /// Checks a set of channels: at least one, `expected_channels` of them if given, all of equal
-/// length (`expected_len` if given, shorter is [`AudioError::FrameTooShort`]) and finite.
+/// length (`expected_len` if given, shorter is [`Error::FrameTooShort`]) and finite.
 pub(crate) fn check_channels(
     channels: &[&[f32]],
     expected_channels: Option<usize>,
     expected_len: Option<usize>,
 ) -> Result<()> {
     let Some(first) = channels.first() else {
-        return Err(AudioError::NoChannels);
+        return Err(Error::NoChannels);
     };
     if let Some(expected) = expected_channels
         && expected != channels.len()
     {
-        return Err(AudioError::ChannelCountMismatch {
+        return Err(Error::ChannelCountMismatch {
             expected,
             got: channels.len(),
         });
@@ -134,20 +134,20 @@ pub(crate) fn check_channels(
     let len = expected_len.unwrap_or(first.len());
     for (channel, ch) in channels.iter().enumerate() {
         if ch.len() < len && expected_len.is_some() {
-            return Err(AudioError::FrameTooShort {
+            return Err(Error::FrameTooShort {
                 frame_len: ch.len(),
                 required: len,
             });
         }
         if ch.len() != len {
-            return Err(AudioError::ChannelLengthMismatch {
+            return Err(Error::ChannelLengthMismatch {
                 channel,
                 expected: len,
                 got: ch.len(),
             });
         }
         if let Some((index, &value)) = ch.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(AudioError::NonFiniteSample {
+            return Err(Error::NonFiniteSample {
                 channel,
                 index,
                 value,

@@ -9,10 +9,10 @@ use std::f64::consts::TAU;
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
-use tracker_model::{Error, Vec2};
+use tracker_model::{Error as ModelError, Vec2};
 
 use crate::array::{MicArray, SOUND_SPEED_MPS};
-use crate::error::{AudioError, Result};
+use crate::error::{Error, Result};
 use crate::interp::SincTable;
 use crate::recording::Recording;
 use tracker_model::SensorPose;
@@ -59,7 +59,7 @@ impl SourcePath {
         match self {
             Self::Fixed { position } => {
                 if !position.iter().all(|v| v.is_finite()) {
-                    return Err(Error::NonFinite {
+                    return Err(ModelError::NonFinite {
                         what: "source position",
                     }
                     .into());
@@ -67,10 +67,10 @@ impl SourcePath {
             }
             Self::Waypoints { times_s, positions } => {
                 if times_s.is_empty() {
-                    return Err(Error::Empty { what: "waypoints" }.into());
+                    return Err(ModelError::Empty { what: "waypoints" }.into());
                 }
                 if times_s.len() != positions.len() {
-                    return Err(Error::ShapeMismatch(format!(
+                    return Err(ModelError::ShapeMismatch(format!(
                         "{} waypoint times but {} positions",
                         times_s.len(),
                         positions.len()
@@ -83,10 +83,10 @@ impl SourcePath {
                     .any(|v| !v.is_finite())
                     || times_s.iter().any(|t| !t.is_finite())
                 {
-                    return Err(Error::NonFinite { what: "waypoints" }.into());
+                    return Err(ModelError::NonFinite { what: "waypoints" }.into());
                 }
                 if times_s.windows(2).any(|w| w[1] <= w[0]) {
-                    return Err(Error::InvalidParameter {
+                    return Err(ModelError::InvalidParameter {
                         name: "times_s",
                         reason: "waypoint times must increase strictly".into(),
                     }
@@ -202,7 +202,7 @@ impl SimulationConfig {
     /// Checks the parameters.
     pub fn check(&self) -> Result<()> {
         if self.sample_rate_hz == 0 {
-            return Err(AudioError::ZeroSampleRate);
+            return Err(Error::ZeroSampleRate);
         }
         tracker_model::ensure_positive(self.sound_speed_mps, "sound_speed_mps")?;
         tracker_model::ensure_non_negative(self.array_height_m, "array_height_m")?;
@@ -212,7 +212,7 @@ impl SimulationConfig {
         if let Some(noise) = &self.noise {
             tracker_model::ensure_in_range(noise.snr_db, -100.0, 200.0, "snr_db")?;
             if let NoiseField::Diffuse { n_directions: 0 } = noise.field {
-                return Err(Error::InvalidParameter {
+                return Err(ModelError::InvalidParameter {
                     name: "n_directions",
                     reason: "a diffuse field needs at least one direction".into(),
                 }
@@ -220,7 +220,7 @@ impl SimulationConfig {
             }
         }
         if self.interp_half_width == 0 {
-            return Err(Error::InvalidParameter {
+            return Err(ModelError::InvalidParameter {
                 name: "interp_half_width",
                 reason: "must be at least 1".into(),
             }
@@ -246,7 +246,7 @@ pub fn simulate<R: Rng + ?Sized>(
     let c = config.sound_speed_mps;
     let n = (duration_s * fs).round() as usize;
     if n == 0 {
-        return Err(Error::InvalidParameter {
+        return Err(ModelError::InvalidParameter {
             name: "duration_s",
             reason: format!("{duration_s} s is less than one sample"),
         }
@@ -270,8 +270,8 @@ pub fn simulate<R: Rng + ?Sized>(
         let lead_s = far / c + (half as f64 + 2.0) / fs;
         let (signal, t0) =
             emitted(&src.signal, src.level, lead_s, duration_s, fs, rng).map_err(|e| match e {
-                AudioError::Model(Error::InvalidParameter { name, reason }) => {
-                    AudioError::Model(Error::InvalidParameter {
+                Error::Model(ModelError::InvalidParameter { name, reason }) => {
+                    Error::Model(ModelError::InvalidParameter {
                         name,
                         reason: format!("source {idx}: {reason}"),
                     })
@@ -332,7 +332,7 @@ fn emitted<R: Rng + ?Sized>(
 ) -> Result<(Vec<f32>, f64)> {
     if let SourceSignal::User { samples } = signal {
         if let Some((index, &value)) = samples.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(AudioError::NonFiniteSample {
+            return Err(Error::NonFiniteSample {
                 channel: 0,
                 index,
                 value,
@@ -435,7 +435,7 @@ fn add_noise<R: Rng + ?Sized>(
     let n = channels.first().map_or(0, Vec::len);
     let signal_power = mean_power(channels);
     if signal_power.is_nan() || signal_power <= 0.0 {
-        return Err(Error::InvalidParameter {
+        return Err(ModelError::InvalidParameter {
             name: "snr_db",
             reason: "an SNR needs a signal, but the sources are silent at the array".into(),
         }

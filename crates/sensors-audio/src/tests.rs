@@ -579,13 +579,10 @@ fn degenerate_input_gets_typed_errors() {
     for method in [Method::TimeDomain, Method::FrequencyDomain] {
         let mut bf = config(method, Weighting::Plain).check(&array).unwrap();
         let good = vec![0.0_f32; 512];
-        assert!(matches!(
-            bf.frame_energies(&[]),
-            Err(AudioError::NoChannels)
-        ));
+        assert!(matches!(bf.frame_energies(&[]), Err(Error::NoChannels)));
         assert!(matches!(
             bf.frame_energies(&[&good, &good, &good]),
-            Err(AudioError::ChannelCountMismatch {
+            Err(Error::ChannelCountMismatch {
                 expected: 4,
                 got: 3
             })
@@ -594,7 +591,7 @@ fn degenerate_input_gets_typed_errors() {
         bad[17] = f32::NAN;
         assert!(matches!(
             bf.frame_energies(&[&good, &good, &bad, &good]),
-            Err(AudioError::NonFiniteSample {
+            Err(Error::NonFiniteSample {
                 channel: 2,
                 index: 17,
                 ..
@@ -603,7 +600,7 @@ fn degenerate_input_gets_typed_errors() {
         let short = vec![0.0_f32; 100];
         assert!(matches!(
             bf.frame_energies(&[&short, &short, &short, &short]),
-            Err(AudioError::FrameTooShort {
+            Err(Error::FrameTooShort {
                 frame_len: 100,
                 required: 512
             })
@@ -616,7 +613,7 @@ fn degenerate_input_gets_typed_errors() {
         };
         assert!(matches!(
             tiny.check(&array),
-            Err(AudioError::FrameTooShort { frame_len: 5, .. })
+            Err(Error::FrameTooShort { frame_len: 5, .. })
         ));
         let zero_rate = BeamformConfig {
             sample_rate_hz: 0,
@@ -624,26 +621,26 @@ fn degenerate_input_gets_typed_errors() {
         };
         assert!(matches!(
             zero_rate.check(&array),
-            Err(AudioError::ZeroSampleRate)
+            Err(Error::ZeroSampleRate)
         ));
     }
     // A 10 m aperture needs ~470 samples of delay: a 512-sample time-domain frame is too short.
     let wide = MicArray::new(&[[0.0, 0.0], [10.0, 0.0]]).unwrap();
     assert!(matches!(
         config(Method::TimeDomain, Weighting::Plain).check(&wide),
-        Err(AudioError::FrameTooShort { frame_len: 512, .. })
+        Err(Error::FrameTooShort { frame_len: 512, .. })
     ));
     assert!(matches!(
         Recording::new(0, 0.0, vec![vec![0.0; 4]]),
-        Err(AudioError::ZeroSampleRate)
+        Err(Error::ZeroSampleRate)
     ));
     assert!(matches!(
         Recording::new(FS, 0.0, vec![]),
-        Err(AudioError::NoChannels)
+        Err(Error::NoChannels)
     ));
     assert!(matches!(
         Recording::new(FS, 0.0, vec![vec![0.0; 4], vec![0.0; 3]]),
-        Err(AudioError::ChannelLengthMismatch {
+        Err(Error::ChannelLengthMismatch {
             channel: 1,
             expected: 4,
             got: 3
@@ -651,13 +648,13 @@ fn degenerate_input_gets_typed_errors() {
     ));
     assert!(matches!(
         config(Method::TimeDomain, Weighting::Phat).check(&array),
-        Err(AudioError::Unsupported(_))
+        Err(Error::Unsupported(_))
     ));
     let rec = Recording::new(FS, 0.0, vec![vec![0.0; 1024]; 3]).unwrap();
     let mut bf = BeamformConfig::default().check(&array).unwrap();
     assert!(matches!(
         bf.beamform(&rec),
-        Err(AudioError::ChannelCountMismatch {
+        Err(Error::ChannelCountMismatch {
             expected: 4,
             got: 3
         })
@@ -722,14 +719,14 @@ fn wav_round_trip_is_lossless_and_integer_pcm_is_scaled() {
     assert_eq!(pcm.channels, vec![vec![0.5, 0.0], vec![-1.0, 0.25]]);
     assert!(matches!(
         Recording::read_wav(Cursor::new(b"not a wav".to_vec()), 0.0),
-        Err(AudioError::Wav(_))
+        Err(Error::Wav(_))
     ));
     // A sample rate whose byte rate overflows the header's 32 bits (found by the fuzzer: hound
     // multiplies unchecked) is a typed error, not a panic or a wrapped header.
     let fast = Recording::new(1_073_741_855, 0.0, vec![vec![0.0; 4]]).unwrap();
     assert!(matches!(
         fast.write_wav(Cursor::new(Vec::new())),
-        Err(AudioError::Unsupported(_))
+        Err(Error::Unsupported(_))
     ));
 }
 

@@ -22,6 +22,8 @@
 //! Invariants: no global state, no ambient randomness (the renderer takes a generator); file
 //! I/O only in [`io`]; every malformed input is an [`Error`], never a panic.
 //!
+//! Background subtraction on your frames (pixels row by row, as [`io`] reads them from files):
+//!
 //! ```
 //! use sensors_video::{BackgroundModel, MogConfig, PixelFormat, VideoFrame, FOREGROUND};
 //!

@@ -30,16 +30,11 @@
 //! use nalgebra::{Matrix4, Vector2, Vector4};
 //! use tracker_model::{ConstantVelocity2, CvNoise, Gaussian, filter, position_measurement, smooth};
 //!
+//! let xy = |x, y| Some(Vector2::new(x, y));
+//! let positions = [xy(0.1, -0.1), xy(1.0, 0.6), None, xy(2.9, 1.4), xy(4.1, 2.0)];
 //! let motion = ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q: 0.01 })?;
 //! let sensor = position_measurement(0.25)?; // σ = 0.5 per axis
 //! let prior = Gaussian::new(Vector4::new(0.0, 0.0, 1.0, 0.5), Matrix4::identity() * 10.0)?;
-//! let positions = [
-//!     Some(Vector2::new(0.1, -0.1)),
-//!     Some(Vector2::new(1.0, 0.6)),
-//!     None,
-//!     Some(Vector2::new(2.9, 1.4)),
-//!     Some(Vector2::new(4.1, 2.0)),
-//! ];
 //! let run = filter(&motion, &sensor, &prior, &positions)?;
 //! let smoothed = smooth(&motion, &run)?;
 //! // The missed second is filled in between its neighbours, close to (2, 1).

@@ -521,8 +521,9 @@ pub fn track_detections(
     }
 }
 
-/// A detection-file tracker behind tracker-model's [`BatchTracker`]: [`track_detections`] on
-/// the scans' boxes (their scores as the confidence column), its configuration fitted to them.
+/// A detection-file tracker behind tracker-model's
+/// [`BatchTracker`](tracker_model::BatchTracker): [`track_detections`] on the scans' boxes
+/// (their scores as the confidence column), its configuration fitted to them.
 #[derive(Debug, Clone)]
 pub struct FileTracker {
     /// Which tracker.
