@@ -20,28 +20,23 @@
 //! The detection-file trackers that `cargo xtask track` and the MOT pipelines share, and the
 //! MOTChallenge text conventions of `cargo xtask eval`, are the library crate `mot`.
 //!
+//! Running a scenario file as `cargo xtask scenarios` does, here the Kalman filter and smoother
+//! on two crossing targets:
+//!
 //! ```
 //! use scenarios::{Env, NoClock, NoInputs, NoProgress, run_pipeline};
 //!
-//! let params: toml::Table = toml::from_str(
-//!     r#"
-//!     n_runs = 4
-//!     [config]
-//!     n_scans = 20
-//!     births_per_scan = 1.0
-//!     p_disappear = 0.05
-//!     p_detect = 0.7
-//!     clutter_per_scan = 5.0
-//!     measurement_noise = [0.031, 0.0, 0.0, 0.031]
-//!     initial_speed_max = 2.0
-//!     max_speed = 3.0
-//!     region = { lower = [0.0, 0.0], upper = [100.0, 100.0] }
-//!     motion = { dt_s = 1.0, noise = { discrete = { acceleration_covariance = [0.031, 0.0, 0.0, 0.031] } } }
-//!     "#,
-//! )?;
+//! #[derive(serde::Deserialize)]
+//! struct Scenario { pipeline: String, seed: u64, params: toml::Table }
+//!
+//! let text = include_str!("../../../fixtures/scenarios/kalman-cv-crossing.toml");
+//! let scenario: Scenario = toml::from_str(text)?;
+//! // No progress bars, no input files, no clock: xtask passes its own.
 //! let env = Env::new(&NoProgress, &NoInputs, &NoClock);
-//! let run = run_pipeline("simulator-poisson", &params, 7, &env)?;
-//! assert!(run.metrics.contains_key("births_per_scan_z"));
+//! let run = run_pipeline(&scenario.pipeline, &scenario.params, scenario.seed, &env)?;
+//! print!("{:#?}", run.metrics);
+//! assert!(run.metrics["position_rmse_smoothed"] < run.metrics["position_rmse_filtered"]);
+//! assert_eq!(run.failed_claims().count(), 0); // the orderings the report states hold
 //! # Ok::<(), anyhow::Error>(())
 //! ```
 

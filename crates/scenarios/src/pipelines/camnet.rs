@@ -11,8 +11,8 @@ use std::collections::BTreeMap;
 
 use anyhow::{Context, Result};
 use camnet::{
-    Blob, CameraTracks, ImageTrack, ImageTrackConfig, Intrinsics, NetworkConfig, Pose, PoseRoute,
-    angle_between_deg, image_tracks, localise, project, rotation_error_deg, umeyama,
+    Blob, CameraTracks, ImageTrack, ImageTrackConfig, Intrinsics, Network, NetworkConfig, Pose,
+    PoseRoute, angle_between_deg, image_tracks, localise, project, rotation_error_deg, umeyama,
 };
 use mcmcda::{McmcdaConfig, OnlineConfig, TrackEnd};
 use nalgebra::{Matrix2, Vector2, Vector3};
@@ -281,15 +281,21 @@ fn overlap(a: &ImageTrack, b: &ImageTrack) -> usize {
     n
 }
 
-fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Result<RunScore> {
-    let k = Intrinsics {
+/// The cameras' pinhole intrinsics: the focal length of the parameters, the principal point
+/// at the image centre.
+fn intrinsics(p: &Params) -> Intrinsics {
+    Intrinsics {
         fx: p.focal_px,
         fy: p.focal_px,
         cx: 0.5 * p.image_size[0],
         cy: 0.5 * p.image_size[1],
-    };
-    let people = walk(p, rng);
-    let cams = cameras(p, rng)?;
+    }
+}
+
+/// The per-camera online MCMCDA that turns blobs into image tracks (Meingast, Oh & Sastry
+/// 2007 track objects in each image before matching), its measurement noise following the
+/// pixel noise.
+fn track_config(p: &Params, noise_px: f64) -> Result<ImageTrackConfig> {
     let sigma = noise_px.max(0.5);
     let max_speed = 60.0;
     let model = McmcdaConfig {
@@ -305,7 +311,7 @@ fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Resu
         track_end: TrackEnd::Undetected,
         ..McmcdaConfig::default()
     };
-    let track_config = ImageTrackConfig {
+    Ok(ImageTrackConfig {
         model,
         online: OnlineConfig {
             window: 8,
@@ -313,11 +319,29 @@ fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Resu
             ..OnlineConfig::default()
         },
         min_length: 10,
-    };
+    })
+}
+
+/// Each camera's image tracks (camera by camera, blobs drawn from `rng` in that order) and
+/// each track's majority person, the truth used only to score.
+type Tracked = (Vec<CameraTracks>, Vec<Vec<Option<usize>>>);
+
+/// Detects and tracks the people in every camera's images: the image tracks camnet's
+/// correspondence search takes (Meingast, Oh & Sastry 2007), with each track's true person.
+fn track_cameras(
+    p: &Params,
+    cams: &[Pose],
+    people: &[Person],
+    noise_px: f64,
+    rng: &mut ChaCha8Rng,
+    seed: u64,
+) -> Result<Tracked> {
+    let k = intrinsics(p);
+    let track_config = track_config(p, noise_px)?;
     let mut inputs = Vec::new();
     let mut labels = Vec::new();
     for (c, cam) in cams.iter().enumerate() {
-        let (scans, who) = detect(p, &k, cam, &people, noise_px, rng)?;
+        let (scans, who) = detect(p, &k, cam, people, noise_px, rng)?;
         let tracks = image_tracks(&scans, &track_config, seed.wrapping_add(c as u64))?;
         labels.push(tracks.iter().map(|t| majority(t, &who)).collect::<Vec<_>>());
         inputs.push(CameraTracks {
@@ -325,15 +349,27 @@ fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Resu
             tracks,
         });
     }
-    // The inlier threshold follows the detector's known noise level: 3σ, at least the
-    // configured value.
-    let mut network = p.network;
-    network.correspondence.threshold_px = network
-        .correspondence
-        .threshold_px
-        .max(p.threshold_sigmas * noise_px);
-    let net = localise(&inputs, &network, seed)?;
-    let min_overlap = p.network.correspondence.min_overlap;
+    Ok((inputs, labels))
+}
+
+/// The pairwise scores of one scene: every pair's errors, and the correspondence counts
+/// behind precision and recall.
+struct PairTally {
+    pairs: Vec<PairScore>,
+    chosen: usize,
+    correct: usize,
+    true_pairs: usize,
+}
+
+/// Scores every camera pair of the network against the truth: shared true track pairs, the
+/// matched tracks that are right, and the pose's rotation and translation-direction errors
+/// (the pairwise errors Meingast, Oh & Sastry 2007 report).
+fn score_pairs(
+    net: &Network,
+    (inputs, labels): &Tracked,
+    cams: &[Pose],
+    min_overlap: usize,
+) -> PairTally {
     let mut pairs = Vec::new();
     let (mut chosen, mut correct, mut true_pairs) = (0, 0, 0);
     for pr in &net.pairs {
@@ -375,7 +411,29 @@ fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Resu
             route: pr.route,
         });
     }
-    // Similarity alignment of the placed cameras' centres (camera 0's frame) to the truth.
+    PairTally {
+        pairs,
+        chosen,
+        correct,
+        true_pairs,
+    }
+}
+
+/// The placed cameras after a similarity alignment to the truth.
+struct Alignment {
+    placed: Vec<usize>,
+    /// Position errors after the joint refinement, % of scene size.
+    position_error_pct: Vec<f64>,
+    /// The same before it.
+    position_error_pct_tree: Vec<f64>,
+    /// Aligned centre and optical axis per camera, for the top view.
+    est_cams: Vec<Option<(Vector3<f64>, Vector3<f64>)>>,
+}
+
+/// Similarity (Umeyama) alignment of the placed cameras' centres (camera 0's frame) to the
+/// truth, after and before the joint refinement: the camera position errors of Meingast, Oh &
+/// Sastry 2007, as % of the largest distance between cameras.
+fn align_cameras(net: &Network, cams: &[Pose]) -> Result<Alignment> {
     let placed: Vec<usize> = (0..cams.len())
         .filter(|&c| net.poses[c].is_some())
         .collect();
@@ -412,6 +470,30 @@ fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Resu
             }
         }
     }
+    Ok(Alignment {
+        placed,
+        position_error_pct,
+        position_error_pct_tree,
+        est_cams,
+    })
+}
+
+/// One scene of Meingast, Oh & Sastry (2007)'s experiment: people walk, every camera tracks
+/// them, camnet localises the network, and the result is scored against the truth.
+fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Result<RunScore> {
+    let people = walk(p, rng);
+    let cams = cameras(p, rng)?;
+    let tracked = track_cameras(p, &cams, &people, noise_px, rng, seed)?;
+    // The inlier threshold follows the detector's known noise level: 3σ, at least the
+    // configured value.
+    let mut network = p.network;
+    network.correspondence.threshold_px = network
+        .correspondence
+        .threshold_px
+        .max(p.threshold_sigmas * noise_px);
+    let net = localise(&tracked.0, &network, seed)?;
+    let tally = score_pairs(&net, &tracked, &cams, p.network.correspondence.min_overlap);
+    let aligned = align_cameras(&net, &cams)?;
     let bundle_rms_px = net
         .bundle
         .as_ref()
@@ -426,16 +508,16 @@ fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Resu
         .collect();
     Ok(RunScore {
         noise_px,
-        pairs,
-        chosen,
-        correct,
-        true_pairs,
-        position_error_pct,
-        position_error_pct_tree,
+        pairs: tally.pairs,
+        chosen: tally.chosen,
+        correct: tally.correct,
+        true_pairs: tally.true_pairs,
+        position_error_pct: aligned.position_error_pct,
+        position_error_pct_tree: aligned.position_error_pct_tree,
         bundle_rms_px,
-        n_placed: placed.len(),
+        n_placed: aligned.placed.len(),
         true_cams,
-        est_cams,
+        est_cams: aligned.est_cams,
         paths,
     })
 }
@@ -484,82 +566,9 @@ impl Pipeline for CamnetLocalisation {
         for s in levels(out) {
             let runs: Vec<&RunScore> = out.runs.iter().filter(|r| same(r.noise_px, s)).collect();
             let key = format!("noise_{}px", fmt_num(s).replace('.', "_"));
-            let errs: Vec<(f64, f64)> = runs
-                .iter()
-                .flat_map(|r| r.judged().filter_map(|p| p.error_deg))
-                .collect();
-            m.insert(
-                format!("{key}_rotation_error_deg_max"),
-                errs.iter().map(|e| e.0).fold(0.0, f64::max),
-            );
-            m.insert(
-                format!("{key}_translation_error_deg_max"),
-                errs.iter().map(|e| e.1).fold(0.0, f64::max),
-            );
-            m.insert(
-                format!("{key}_rotation_error_deg_mean"),
-                mean_ci(errs.iter().map(|e| e.0)).0,
-            );
-            m.insert(
-                format!("{key}_translation_error_deg_mean"),
-                mean_ci(errs.iter().map(|e| e.1)).0,
-            );
-            let missing = runs
-                .iter()
-                .map(|r| r.judged().filter(|p| p.error_deg.is_none()).count())
-                .sum::<usize>();
-            m.insert(format!("{key}_judged_pairs_missing"), missing as f64);
-            for (route, name) in ROUTES {
-                let count = runs
-                    .iter()
-                    .map(|r| r.judged().filter(|p| p.route == Some(route)).count())
-                    .sum::<usize>();
-                m.insert(format!("{key}_judged_pairs_{name}"), count as f64);
-            }
-            let judged = runs.iter().map(|r| r.judged().count()).sum::<usize>();
-            m.insert(format!("{key}_judged_pairs"), judged as f64);
-            let pos: Vec<f64> = runs
-                .iter()
-                .flat_map(|r| r.position_error_pct.iter().copied())
-                .collect();
-            m.insert(
-                format!("{key}_position_error_pct_max"),
-                pos.iter().copied().fold(0.0, f64::max),
-            );
-            m.insert(
-                format!("{key}_position_error_pct_mean"),
-                mean_ci(pos.iter().copied()).0,
-            );
-            let tree: Vec<f64> = runs
-                .iter()
-                .flat_map(|r| r.position_error_pct_tree.iter().copied())
-                .collect();
-            m.insert(
-                format!("{key}_position_error_pct_mean_before_bundle"),
-                mean_ci(tree.iter().copied()).0,
-            );
-            let rms: Vec<(f64, f64)> = runs.iter().filter_map(|r| r.bundle_rms_px).collect();
-            m.insert(format!("{key}_bundle_runs"), rms.len() as f64);
-            m.insert(
-                format!("{key}_bundle_rms_px_before"),
-                mean_ci(rms.iter().map(|e| e.0)).0,
-            );
-            m.insert(
-                format!("{key}_bundle_rms_px_after"),
-                mean_ci(rms.iter().map(|e| e.1)).0,
-            );
-            m.insert(
-                format!("{key}_correspondence_precision"),
-                mean_ci(runs.iter().map(|r| r.precision())).0,
-            );
-            m.insert(
-                format!("{key}_correspondence_recall"),
-                mean_ci(runs.iter().map(|r| r.recall())).0,
-            );
-            m.insert(
-                format!("{key}_cameras_placed"),
-                runs.iter().map(|r| r.n_placed).sum::<usize>() as f64,
-            );
+            pose_metrics(&mut m, &key, &runs);
+            position_metrics(&mut m, &key, &runs);
+            correspondence_metrics(&mut m, &key, &runs);
         }
         m
     }
@@ -654,199 +663,363 @@ impl Pipeline for CamnetLocalisation {
     }
 
     fn present(out: &Output) -> Section {
-        let mut pair_table = Table::new(
-            &format!(
-                "Camera pairs at {} px noise, run 0: shared true track pairs and pose errors",
-                fmt_num(out.claim_noise_px)
-            ),
-            &[
-                "pair",
-                "shared tracks",
-                "pose from",
-                "rotation error (°)",
-                "translation-direction error (°)",
-            ],
-        );
         let run0 = out
             .runs
             .iter()
             .find(|r| same(r.noise_px, out.claim_noise_px));
-        if let Some(r) = run0 {
-            for p in &r.pairs {
-                let (re, te) = p.error_deg.map_or(("–".into(), "–".into()), |e| {
-                    (fmt_num(e.0), fmt_num(e.1))
-                });
-                pair_table.row(vec![
-                    format!("{}–{}", p.a, p.b),
-                    p.shared_tracks.to_string(),
-                    route_name(p.route).into(),
-                    re,
-                    te,
-                ]);
-            }
-        }
-        let mut sweep = Table::new(
-            "Against pixel noise (all runs): pairs sharing ≥ 2 tracks; positions after Umeyama alignment",
-            &[
-                "noise (px)",
-                "rotation error mean / max (°)",
-                "direction error mean / max (°)",
-                "pairs direct / guided / composed / none",
-                "position error mean / max (%)",
-                "before joint refinement (%)",
-                "reprojection RMS before / after refinement (px)",
-                "correspondence precision",
-                "recall",
-            ],
-        );
-        let mut rot_pts = Vec::new();
-        let mut dir_pts = Vec::new();
-        let mut pos_pts = Vec::new();
-        for s in levels(out) {
-            let runs: Vec<&RunScore> = out.runs.iter().filter(|r| same(r.noise_px, s)).collect();
-            let errs: Vec<(f64, f64)> = runs
-                .iter()
-                .flat_map(|r| r.judged().filter_map(|p| p.error_deg))
-                .collect();
-            let by_route = |route: Option<PoseRoute>| {
-                runs.iter()
-                    .map(|r| r.judged().filter(|p| p.route == route).count())
-                    .sum::<usize>()
-            };
-            let routes = format!(
-                "{} / {} / {} / {}",
-                by_route(Some(PoseRoute::Direct)),
-                by_route(Some(PoseRoute::Guided)),
-                by_route(Some(PoseRoute::Composed)),
-                by_route(None)
-            );
-            let pos: Vec<f64> = runs
-                .iter()
-                .flat_map(|r| r.position_error_pct.iter().copied())
-                .collect();
-            let mm = |v: &mut dyn Iterator<Item = f64>| {
-                let v: Vec<f64> = v.collect();
-                (
-                    mean_ci(v.iter().copied()).0,
-                    v.iter().copied().fold(0.0, f64::max),
-                )
-            };
-            let r = mm(&mut errs.iter().map(|e| e.0));
-            let d = mm(&mut errs.iter().map(|e| e.1));
-            let q = mm(&mut pos.iter().copied());
-            rot_pts.push((s, r.0));
-            dir_pts.push((s, d.0));
-            pos_pts.push((s, q.0));
-            sweep.row(vec![
-                fmt_num(s),
-                format!("{} / {}", fmt_num(r.0), fmt_num(r.1)),
-                format!("{} / {}", fmt_num(d.0), fmt_num(d.1)),
-                routes,
-                format!("{} / {}", fmt_num(q.0), fmt_num(q.1)),
-                {
-                    let t = mm(&mut runs
-                        .iter()
-                        .flat_map(|r| r.position_error_pct_tree.iter().copied()));
-                    format!("{} / {}", fmt_num(t.0), fmt_num(t.1))
-                },
-                {
-                    let rms: Vec<(f64, f64)> =
-                        runs.iter().filter_map(|r| r.bundle_rms_px).collect();
-                    if rms.is_empty() {
-                        "–".into()
-                    } else {
-                        format!(
-                            "{} / {}",
-                            fmt_num(mean_ci(rms.iter().map(|e| e.0)).0),
-                            fmt_num(mean_ci(rms.iter().map(|e| e.1)).0)
-                        )
-                    }
-                },
-                fmt_num(mean_ci(runs.iter().map(|r| r.precision())).0),
-                fmt_num(mean_ci(runs.iter().map(|r| r.recall())).0),
-            ]);
-        }
+        let stats: Vec<LevelStats> = levels(out)
+            .into_iter()
+            .map(|s| level_stats(out, s))
+            .collect();
         let mut figures = Vec::new();
         if let Some(r) = run0 {
-            let mut series = Vec::new();
-            for path in &r.paths {
-                series.push(Series::new("", path.clone(), Style::Faint, 7));
-            }
-            let fov = |c: &Vector3<f64>, axis: &Vector3<f64>| {
-                let a = axis.y.atan2(axis.x);
-                let half = 0.6;
-                let l = 6.0;
-                vec![
-                    (c.x + l * (a + half).cos(), c.y + l * (a + half).sin()),
-                    (c.x, c.y),
-                    (c.x + l * (a - half).cos(), c.y + l * (a - half).sin()),
-                ]
-            };
-            for (i, (c, axis)) in r.true_cams.iter().enumerate() {
-                series.push(Series::new(
-                    if i == 0 {
-                        "true camera, field of view"
-                    } else {
-                        ""
-                    },
-                    fov(c, axis),
-                    Style::ThinLine,
-                    0,
-                ));
-            }
-            for (i, e) in r.est_cams.iter().enumerate() {
-                if let Some((c, axis)) = e {
-                    series.push(Series::new(
-                        if i == 0 { "estimated (aligned)" } else { "" },
-                        fov(c, axis),
-                        Style::ThinLine,
-                        1,
-                    ));
-                }
-            }
-            series.push(Series::new(
-                "true centres",
-                r.true_cams.iter().map(|c| (c.0.x, c.0.y)).collect(),
-                Style::Markers,
-                0,
-            ));
-            series.push(Series::new(
-                "estimated centres",
-                r.est_cams
-                    .iter()
-                    .flatten()
-                    .map(|c| (c.0.x, c.0.y))
-                    .collect(),
-                Style::Markers,
-                1,
-            ));
-            figures.push(Figure::new(
-                "camnet_top_view",
-                "Top view of run 0: walking paths (grey), true cameras and the estimate after similarity alignment, with a wedge along each optical axis",
-                Chart::new("Cameras from above", "x (m)", "y (m)", series),
-            ));
+            figures.push(top_view_figure(r));
         }
-        figures.push(Figure::new(
-            "camnet_noise",
-            "Mean errors against pixel noise (pairs sharing ≥ 2 tracks; all placed cameras)",
-            Chart::new(
-                "Error against pixel noise",
-                "pixel noise σ (px)",
-                "error (° or % of scene)",
-                vec![
-                    Series::new("rotation error (°)", rot_pts, Style::Line, 0),
-                    Series::new("translation-direction error (°)", dir_pts, Style::Line, 1),
-                    Series::new("position error (% of scene)", pos_pts, Style::Line, 2),
-                ],
-            ),
-        ));
+        figures.push(noise_figure(&stats));
         Section {
-            title: "Camera-network localisation from image tracks (Meingast, Oh & Sastry 2007)".into(),
-            summary: "People walk on a ground plane seen by calibrated cameras on a ring, each aimed off-centre so that some pairs share no one. A simulated blob detector reports each visible person's centroid, top and bottom with Gaussian pixel noise, misses some, and adds false blobs. Online MCMCDA tracks the centroids in each image; camnet matches the image tracks between cameras (pooled time-aligned top and bottom points must fit one essential matrix), estimates each pair's pose (normalised 8-point in LO-RANSAC, cheirality, Levenberg-Marquardt), chains the poses over the maximum spanning tree of the view graph and sets the scales from points seen by three cameras; a pair the search left without a pose is matched again under the pose composed through the network (its pose then comes from its own points), and a joint refinement (bundle adjustment) over all cameras and triangulated track points polishes the positions. Errors are against the truth; positions after a similarity (Umeyama) alignment, as % of the largest distance between cameras.".into(),
-            tables: vec![pair_table, sweep],
+            title: "Camera-network localisation from image tracks (Meingast, Oh & Sastry 2007)"
+                .into(),
+            summary: SUMMARY.into(),
+            tables: vec![pair_table(out, run0), sweep_table(&stats)],
             figures,
         }
     }
+}
+
+/// The report's summary: the simulated scene and the steps of camnet's localisation
+/// (Meingast, Oh & Sastry 2007), and how the errors are measured.
+const SUMMARY: &str = "People walk on a ground plane seen by calibrated cameras on a ring, each aimed off-centre so that some pairs share no one. A simulated blob detector reports each visible person's centroid, top and bottom with Gaussian pixel noise, misses some, and adds false blobs. Online MCMCDA tracks the centroids in each image; camnet matches the image tracks between cameras (pooled time-aligned top and bottom points must fit one essential matrix), estimates each pair's pose (normalised 8-point in LO-RANSAC, cheirality, Levenberg-Marquardt), chains the poses over the maximum spanning tree of the view graph and sets the scales from points seen by three cameras; a pair the search left without a pose is matched again under the pose composed through the network (its pose then comes from its own points), and a joint refinement (bundle adjustment) over all cameras and triangulated track points polishes the positions. Errors are against the truth; positions after a similarity (Umeyama) alignment, as % of the largest distance between cameras.";
+
+/// The pose metrics of one noise level: the pairwise rotation and translation-direction
+/// errors of the pairs sharing ≥ 2 tracks (Meingast, Oh & Sastry 2007), the pairs left
+/// without a pose, and the route each pose took.
+fn pose_metrics(m: &mut Metrics, key: &str, runs: &[&RunScore]) {
+    let errs: Vec<(f64, f64)> = runs
+        .iter()
+        .flat_map(|r| r.judged().filter_map(|p| p.error_deg))
+        .collect();
+    m.insert(
+        format!("{key}_rotation_error_deg_max"),
+        errs.iter().map(|e| e.0).fold(0.0, f64::max),
+    );
+    m.insert(
+        format!("{key}_translation_error_deg_max"),
+        errs.iter().map(|e| e.1).fold(0.0, f64::max),
+    );
+    m.insert(
+        format!("{key}_rotation_error_deg_mean"),
+        mean_ci(errs.iter().map(|e| e.0)).0,
+    );
+    m.insert(
+        format!("{key}_translation_error_deg_mean"),
+        mean_ci(errs.iter().map(|e| e.1)).0,
+    );
+    let missing = runs
+        .iter()
+        .map(|r| r.judged().filter(|p| p.error_deg.is_none()).count())
+        .sum::<usize>();
+    m.insert(format!("{key}_judged_pairs_missing"), missing as f64);
+    for (route, name) in ROUTES {
+        let count = runs
+            .iter()
+            .map(|r| r.judged().filter(|p| p.route == Some(route)).count())
+            .sum::<usize>();
+        m.insert(format!("{key}_judged_pairs_{name}"), count as f64);
+    }
+    let judged = runs.iter().map(|r| r.judged().count()).sum::<usize>();
+    m.insert(format!("{key}_judged_pairs"), judged as f64);
+}
+
+/// The position metrics of one noise level: camera position errors after the similarity
+/// alignment, before and after the joint refinement, and its reprojection RMS.
+fn position_metrics(m: &mut Metrics, key: &str, runs: &[&RunScore]) {
+    let pos: Vec<f64> = runs
+        .iter()
+        .flat_map(|r| r.position_error_pct.iter().copied())
+        .collect();
+    m.insert(
+        format!("{key}_position_error_pct_max"),
+        pos.iter().copied().fold(0.0, f64::max),
+    );
+    m.insert(
+        format!("{key}_position_error_pct_mean"),
+        mean_ci(pos.iter().copied()).0,
+    );
+    let tree: Vec<f64> = runs
+        .iter()
+        .flat_map(|r| r.position_error_pct_tree.iter().copied())
+        .collect();
+    m.insert(
+        format!("{key}_position_error_pct_mean_before_bundle"),
+        mean_ci(tree.iter().copied()).0,
+    );
+    let rms: Vec<(f64, f64)> = runs.iter().filter_map(|r| r.bundle_rms_px).collect();
+    m.insert(format!("{key}_bundle_runs"), rms.len() as f64);
+    m.insert(
+        format!("{key}_bundle_rms_px_before"),
+        mean_ci(rms.iter().map(|e| e.0)).0,
+    );
+    m.insert(
+        format!("{key}_bundle_rms_px_after"),
+        mean_ci(rms.iter().map(|e| e.1)).0,
+    );
+}
+
+/// The correspondence metrics of one noise level: precision and recall of the matched track
+/// pairs, and the cameras placed.
+fn correspondence_metrics(m: &mut Metrics, key: &str, runs: &[&RunScore]) {
+    m.insert(
+        format!("{key}_correspondence_precision"),
+        mean_ci(runs.iter().map(|r| r.precision())).0,
+    );
+    m.insert(
+        format!("{key}_correspondence_recall"),
+        mean_ci(runs.iter().map(|r| r.recall())).0,
+    );
+    m.insert(
+        format!("{key}_cameras_placed"),
+        runs.iter().map(|r| r.n_placed).sum::<usize>() as f64,
+    );
+}
+
+/// The pair table: run 0 at the claims' noise level, each pair's shared true tracks, pose
+/// route and pose errors (the pairwise errors of Meingast, Oh & Sastry 2007).
+fn pair_table(out: &Output, run0: Option<&RunScore>) -> Table {
+    let mut pair_table = Table::new(
+        &format!(
+            "Camera pairs at {} px noise, run 0: shared true track pairs and pose errors",
+            fmt_num(out.claim_noise_px)
+        ),
+        &[
+            "pair",
+            "shared tracks",
+            "pose from",
+            "rotation error (°)",
+            "translation-direction error (°)",
+        ],
+    );
+    if let Some(r) = run0 {
+        for p in &r.pairs {
+            let (re, te) = p.error_deg.map_or(("–".into(), "–".into()), |e| {
+                (fmt_num(e.0), fmt_num(e.1))
+            });
+            pair_table.row(vec![
+                format!("{}–{}", p.a, p.b),
+                p.shared_tracks.to_string(),
+                route_name(p.route).into(),
+                re,
+                te,
+            ]);
+        }
+    }
+    pair_table
+}
+
+/// One noise level's errors over all its runs, for the sweep table and the noise chart.
+struct LevelStats {
+    noise_px: f64,
+    /// (mean, max) of the rotation errors (°).
+    rotation: (f64, f64),
+    /// (mean, max) of the translation-direction errors (°).
+    direction: (f64, f64),
+    /// (mean, max) of the position errors (%).
+    position: (f64, f64),
+    /// (mean, max) of the position errors before the joint refinement (%).
+    position_tree: (f64, f64),
+    /// Pairs direct / guided / composed / none.
+    routes: String,
+    /// The reprojection RMS before / after the joint refinement, "–" when it never ran.
+    bundle_rms: String,
+    precision: f64,
+    recall: f64,
+}
+
+/// The errors of noise level `s` over its runs: pairs sharing ≥ 2 tracks, positions after
+/// the Umeyama alignment (Meingast, Oh & Sastry 2007 report both).
+fn level_stats(out: &Output, s: f64) -> LevelStats {
+    let runs: Vec<&RunScore> = out.runs.iter().filter(|r| same(r.noise_px, s)).collect();
+    let errs: Vec<(f64, f64)> = runs
+        .iter()
+        .flat_map(|r| r.judged().filter_map(|p| p.error_deg))
+        .collect();
+    let by_route = |route: Option<PoseRoute>| {
+        runs.iter()
+            .map(|r| r.judged().filter(|p| p.route == route).count())
+            .sum::<usize>()
+    };
+    let routes = format!(
+        "{} / {} / {} / {}",
+        by_route(Some(PoseRoute::Direct)),
+        by_route(Some(PoseRoute::Guided)),
+        by_route(Some(PoseRoute::Composed)),
+        by_route(None)
+    );
+    let pos: Vec<f64> = runs
+        .iter()
+        .flat_map(|r| r.position_error_pct.iter().copied())
+        .collect();
+    let mm = |v: &mut dyn Iterator<Item = f64>| {
+        let v: Vec<f64> = v.collect();
+        (
+            mean_ci(v.iter().copied()).0,
+            v.iter().copied().fold(0.0, f64::max),
+        )
+    };
+    let rms: Vec<(f64, f64)> = runs.iter().filter_map(|r| r.bundle_rms_px).collect();
+    LevelStats {
+        noise_px: s,
+        rotation: mm(&mut errs.iter().map(|e| e.0)),
+        direction: mm(&mut errs.iter().map(|e| e.1)),
+        position: mm(&mut pos.iter().copied()),
+        position_tree: mm(&mut runs
+            .iter()
+            .flat_map(|r| r.position_error_pct_tree.iter().copied())),
+        routes,
+        bundle_rms: if rms.is_empty() {
+            "–".into()
+        } else {
+            format!(
+                "{} / {}",
+                fmt_num(mean_ci(rms.iter().map(|e| e.0)).0),
+                fmt_num(mean_ci(rms.iter().map(|e| e.1)).0)
+            )
+        },
+        precision: mean_ci(runs.iter().map(|r| r.precision())).0,
+        recall: mean_ci(runs.iter().map(|r| r.recall())).0,
+    }
+}
+
+/// The sweep table: every noise level's pose and position errors, routes, refinement and
+/// correspondence quality, over all runs.
+fn sweep_table(stats: &[LevelStats]) -> Table {
+    let mut sweep = Table::new(
+        "Against pixel noise (all runs): pairs sharing ≥ 2 tracks; positions after Umeyama alignment",
+        &[
+            "noise (px)",
+            "rotation error mean / max (°)",
+            "direction error mean / max (°)",
+            "pairs direct / guided / composed / none",
+            "position error mean / max (%)",
+            "before joint refinement (%)",
+            "reprojection RMS before / after refinement (px)",
+            "correspondence precision",
+            "recall",
+        ],
+    );
+    let mean_max = |(mean, max): (f64, f64)| format!("{} / {}", fmt_num(mean), fmt_num(max));
+    for l in stats {
+        sweep.row(vec![
+            fmt_num(l.noise_px),
+            mean_max(l.rotation),
+            mean_max(l.direction),
+            l.routes.clone(),
+            mean_max(l.position),
+            mean_max(l.position_tree),
+            l.bundle_rms.clone(),
+            fmt_num(l.precision),
+            fmt_num(l.recall),
+        ]);
+    }
+    sweep
+}
+
+/// The "camnet_top_view" figure: run 0 from above, the walking paths, the true cameras and
+/// the estimate after the similarity alignment, with a wedge along each optical axis.
+fn top_view_figure(r: &RunScore) -> Figure {
+    let mut series = Vec::new();
+    for path in &r.paths {
+        series.push(Series::new("", path.clone(), Style::Faint, 7));
+    }
+    let fov = |c: &Vector3<f64>, axis: &Vector3<f64>| {
+        let a = axis.y.atan2(axis.x);
+        let half = 0.6;
+        let l = 6.0;
+        vec![
+            (c.x + l * (a + half).cos(), c.y + l * (a + half).sin()),
+            (c.x, c.y),
+            (c.x + l * (a - half).cos(), c.y + l * (a - half).sin()),
+        ]
+    };
+    for (i, (c, axis)) in r.true_cams.iter().enumerate() {
+        series.push(Series::new(
+            if i == 0 {
+                "true camera, field of view"
+            } else {
+                ""
+            },
+            fov(c, axis),
+            Style::ThinLine,
+            0,
+        ));
+    }
+    for (i, e) in r.est_cams.iter().enumerate() {
+        if let Some((c, axis)) = e {
+            series.push(Series::new(
+                if i == 0 { "estimated (aligned)" } else { "" },
+                fov(c, axis),
+                Style::ThinLine,
+                1,
+            ));
+        }
+    }
+    series.push(Series::new(
+        "true centres",
+        r.true_cams.iter().map(|c| (c.0.x, c.0.y)).collect(),
+        Style::Markers,
+        0,
+    ));
+    series.push(Series::new(
+        "estimated centres",
+        r.est_cams
+            .iter()
+            .flatten()
+            .map(|c| (c.0.x, c.0.y))
+            .collect(),
+        Style::Markers,
+        1,
+    ));
+    Figure::new(
+        "camnet_top_view",
+        "Top view of run 0: walking paths (grey), true cameras and the estimate after similarity alignment, with a wedge along each optical axis",
+        Chart::new("Cameras from above", "x (m)", "y (m)", series),
+    )
+}
+
+/// The "camnet_noise" figure: the mean rotation, direction and position errors against the
+/// pixel noise, the sweep table's means.
+fn noise_figure(stats: &[LevelStats]) -> Figure {
+    let points = |f: fn(&LevelStats) -> f64| -> Vec<(f64, f64)> {
+        stats.iter().map(|l| (l.noise_px, f(l))).collect()
+    };
+    Figure::new(
+        "camnet_noise",
+        "Mean errors against pixel noise (pairs sharing ≥ 2 tracks; all placed cameras)",
+        Chart::new(
+            "Error against pixel noise",
+            "pixel noise σ (px)",
+            "error (° or % of scene)",
+            vec![
+                Series::new(
+                    "rotation error (°)",
+                    points(|l| l.rotation.0),
+                    Style::Line,
+                    0,
+                ),
+                Series::new(
+                    "translation-direction error (°)",
+                    points(|l| l.direction.0),
+                    Style::Line,
+                    1,
+                ),
+                Series::new(
+                    "position error (% of scene)",
+                    points(|l| l.position.0),
+                    Style::Line,
+                    2,
+                ),
+            ],
+        ),
+    )
 }
 
 /// The routes a pair's pose can take, with their metric names.

@@ -386,100 +386,148 @@ fn one_run(p: &Params, run: usize, rng: &mut ChaCha8Rng, clock: &dyn Clock) -> R
     Ok((truth.len(), n_all - out.len(), scene_n, out))
 }
 
+/// Checks that the oracle rows and the ML rows share what Oh & Jung's (2015) comparison
+/// holds fixed: the oracle's measurement variance is the simulator's σ², and both start
+/// from the same initial velocity variance.
+fn check_params(p: &Params) -> Result<()> {
+    anyhow::ensure!(p.n_runs > 0, "need n_runs > 0");
+    anyhow::ensure!(
+        (p.gdt.measurement_variance - p.detection_sigma.powi(2)).abs() < 1e-12,
+        "the oracle's measurement_variance must be detection_sigma²"
+    );
+    anyhow::ensure!(
+        (p.gdt.initial_velocity_variance - p.noise_search.initial_velocity_variance).abs() < 1e-12,
+        "the oracle and the ML rows must share initial_velocity_variance"
+    );
+    Ok(())
+}
+
+/// Every scene, in parallel: scene r on stream r of the scenario's generator, so the result
+/// does not depend on rayon's thread count; results come back in scene order.
+fn run_scenes(p: &Params, rng: &ChaCha8Rng, env: &Env<'_>) -> Result<Vec<RunOut>> {
+    let base = rng.clone();
+    (0..p.n_runs)
+        .into_par_iter()
+        .map(|r| {
+            let mut rng = base.clone();
+            rng.set_stream(r as u64);
+            let out = one_run(p, r, &mut rng, env.clock);
+            env.progress.advance(1);
+            out
+        })
+        .collect::<Result<_>>()
+}
+
+/// The gaps of every scene pooled, in scene order.
+struct Pooled {
+    n_walkers: usize,
+    n_dropped: usize,
+    cases: Vec<CaseResult>,
+    /// Every hidden position, and every method's estimate of it, in gap order.
+    all_truth: Vec<Vec2>,
+    all_est: Vec<Vec<Vec2>>,
+    /// The longest gap (the first of that length) with every method's recovery.
+    longest: Option<(Case, Vec<RecoveredGap>)>,
+    scene_windows: Vec<[usize; 2]>,
+}
+
+/// Pools the scenes' gaps: each gap's per-method MAE (Oh & Jung 2015, Table 1's per-gap
+/// error), the hidden positions with every method's estimates for the pooled MAE, and the
+/// longest gap for the figures.
+fn pool_gaps(runs: Vec<RunOut>) -> Result<Pooled> {
+    let mut pooled = Pooled {
+        n_walkers: 0,
+        n_dropped: 0,
+        cases: Vec::new(),
+        all_truth: Vec::new(),
+        all_est: vec![Vec::new(); METHODS.len()],
+        longest: None,
+        scene_windows: Vec::new(),
+    };
+    for (run, (walkers, dropped, windows, gaps)) in runs.into_iter().enumerate() {
+        pooled.n_walkers += walkers;
+        pooled.n_dropped += dropped;
+        if !gaps.is_empty() {
+            pooled.scene_windows.push(windows);
+        }
+        for (case, recovered, micros, noise) in gaps {
+            let truth: Vec<Vec2> = case.0.hidden.iter().map(|o| o.position).collect();
+            let maes = recovered
+                .iter()
+                .map(|r| mae(&truth, &r.positions))
+                .collect::<eval_metrics::Result<Vec<_>>>()?;
+            for (k, r) in recovered.iter().enumerate() {
+                pooled.all_est[k].extend(r.positions.iter().copied());
+            }
+            pooled.all_truth.extend(&truth);
+            pooled.cases.push(CaseResult {
+                run,
+                n_hidden: truth.len(),
+                maes,
+                micros,
+                noise,
+            });
+            if pooled
+                .longest
+                .as_ref()
+                .is_none_or(|(c, _)| c.0.hidden.len() < truth.len())
+            {
+                pooled.longest = Some((case, recovered));
+            }
+        }
+    }
+    Ok(pooled)
+}
+
+/// Every method's MAE over the pooled hidden positions, MMAE with its 95 % interval over the
+/// gaps, and mean time per gap: the columns of Oh & Jung's (2015) Tables 1 and 2.
+fn method_results(
+    cases: &[CaseResult],
+    all_truth: &[Vec2],
+    all_est: &[Vec<Vec2>],
+) -> Result<Vec<MethodResult>> {
+    (0..METHODS.len())
+        .map(|k| -> Result<MethodResult> {
+            let per_gap: Vec<Mae> = cases.iter().map(|c| c.maes[k]).collect();
+            let euclid: Vec<f64> = per_gap.iter().map(|m| m.euclidean).collect();
+            let micros: Vec<f64> = cases.iter().map(|c| c.micros[k]).collect();
+            Ok(MethodResult {
+                pooled: mae(all_truth, &all_est[k])?,
+                mmae: mmae(&per_gap)?,
+                mmae_ci95: mean_ci(&euclid).1,
+                micros: mean_ci(&micros).0,
+            })
+        })
+        .collect::<Result<Vec<_>>>()
+}
+
 impl Pipeline for GdtGaps {
     type Params = Params;
     type Output = Output;
 
     fn compute(p: &Params, rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Output> {
-        anyhow::ensure!(p.n_runs > 0, "need n_runs > 0");
-        anyhow::ensure!(
-            (p.gdt.measurement_variance - p.detection_sigma.powi(2)).abs() < 1e-12,
-            "the oracle's measurement_variance must be detection_sigma²"
-        );
-        anyhow::ensure!(
-            (p.gdt.initial_velocity_variance - p.noise_search.initial_velocity_variance).abs()
-                < 1e-12,
-            "the oracle and the ML rows must share initial_velocity_variance"
-        );
+        check_params(p)?;
         env.progress.set_length(p.n_runs as u64);
-        let base = rng.clone();
-        // One generator stream per scene: the result does not depend on rayon's thread count.
-        let runs: Vec<RunOut> = (0..p.n_runs)
-            .into_par_iter()
-            .map(|r| {
-                let mut rng = base.clone();
-                rng.set_stream(r as u64);
-                let out = one_run(p, r, &mut rng, env.clock);
-                env.progress.advance(1);
-                out
-            })
-            .collect::<Result<_>>()?;
-        let (mut n_walkers, mut n_dropped) = (0, 0);
-        let mut cases = Vec::new();
-        let mut all_truth: Vec<Vec2> = Vec::new();
-        let mut all_est: Vec<Vec<Vec2>> = vec![Vec::new(); METHODS.len()];
-        let mut longest: Option<(Case, Vec<RecoveredGap>)> = None;
-        let mut scene_windows = Vec::new();
-        for (run, (walkers, dropped, windows, gaps)) in runs.into_iter().enumerate() {
-            n_walkers += walkers;
-            n_dropped += dropped;
-            if !gaps.is_empty() {
-                scene_windows.push(windows);
-            }
-            for (case, recovered, micros, noise) in gaps {
-                let truth: Vec<Vec2> = case.0.hidden.iter().map(|o| o.position).collect();
-                let maes = recovered
-                    .iter()
-                    .map(|r| mae(&truth, &r.positions))
-                    .collect::<eval_metrics::Result<Vec<_>>>()?;
-                for (k, r) in recovered.iter().enumerate() {
-                    all_est[k].extend(r.positions.iter().copied());
-                }
-                all_truth.extend(&truth);
-                cases.push(CaseResult {
-                    run,
-                    n_hidden: truth.len(),
-                    maes,
-                    micros,
-                    noise,
-                });
-                if longest
-                    .as_ref()
-                    .is_none_or(|(c, _)| c.0.hidden.len() < truth.len())
-                {
-                    longest = Some((case, recovered));
-                }
-            }
-        }
-        let longest =
-            longest.ok_or_else(|| anyhow::anyhow!("no crossing of the mask in the gap range"))?;
-        let methods = (0..METHODS.len())
-            .map(|k| -> Result<MethodResult> {
-                let per_gap: Vec<Mae> = cases.iter().map(|c| c.maes[k]).collect();
-                let euclid: Vec<f64> = per_gap.iter().map(|m| m.euclidean).collect();
-                let micros: Vec<f64> = cases.iter().map(|c| c.micros[k]).collect();
-                Ok(MethodResult {
-                    pooled: mae(&all_truth, &all_est[k])?,
-                    mmae: mmae(&per_gap)?,
-                    mmae_ci95: mean_ci(&euclid).1,
-                    micros: mean_ci(&micros).0,
-                })
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let runs = run_scenes(p, rng, env)?;
+        let pooled = pool_gaps(runs)?;
+        let longest = pooled
+            .longest
+            .ok_or_else(|| anyhow::anyhow!("no crossing of the mask in the gap range"))?;
+        let methods = method_results(&pooled.cases, &pooled.all_truth, &pooled.all_est)?;
         Ok(Output {
             width: p.width,
             height: p.height,
             n_frames: p.n_frames,
             n_runs: p.n_runs,
             gap_frames: p.gap_frames,
-            n_walkers,
+            n_walkers: pooled.n_walkers,
             detection_variance: p.detection_sigma.powi(2),
-            n_dropped,
+            n_dropped: pooled.n_dropped,
             mask_lower: *p.mask.lower(),
             mask_upper: *p.mask.upper(),
-            n_hidden: all_truth.len(),
-            scene_windows,
-            cases,
+            n_hidden: pooled.all_truth.len(),
+            scene_windows: pooled.scene_windows,
+            cases: pooled.cases,
             methods,
             longest,
         })
@@ -507,96 +555,16 @@ impl Pipeline for GdtGaps {
     }
 
     fn present(out: &Output) -> Section {
-        let (lo, hi) = (out.mask_lower, out.mask_upper);
-        let (table, paired, timing, noise) = tables(out);
-        let best = best_fair(out);
-        let goal = method("gdt_goal_state_ml");
-        let m = |key: &str| {
-            let r = &out.methods[method(key)];
-            pm(r.mmae.euclidean, r.mmae_ci95)
-        };
-        let d = |key: &str| {
-            let (d, ci) = paired_difference(out, method(key), goal);
-            pm(d, ci)
-        };
-        let (dg, dg_ci) = paired_difference(out, method("gdt_ml"), method("smoothing_spline_gcv"));
-        let median_window = |slot: usize| {
-            let mut ns: Vec<usize> = out.scene_windows.iter().map(|w| w[slot]).collect();
-            ns.sort_unstable();
-            ns.get(ns.len() / 2).copied().unwrap_or(0)
-        };
-        let summary = format!(
-            "{} scenes (generator streams 0–{} of the scenario seed) with {} walkers on average \
-             over {} frames each in a {}×{} image; a {}×{} mask hides each crossing. {} crossings \
-             of {}–{} frames ({} hidden positions) are scored; {} crossings outside that range \
-             (or with fewer than 3 observations on a side) are not. MMAE is mean ± 95 % CI \
-             (1.96·s/√n over gaps); differences are paired over the same gaps. Every fair \
-             method sees only the observed frames: GDT's noise (r, q) is a maximum-likelihood \
-             estimate over the two segments, the smoothing spline's λ is chosen by GCV, the \
-             window fits' n by cross-validation on pseudo-gaps of the same length cut inside \
-             the segments (per gap, or summed over a scene's gaps: median n {} for the B-spline \
-             and {} for the cubic). No reported seed was used for tuning. Result: the best fair \
-             method is {} (MMAE {}). Ours is the goal-state variant (the goal is B's full state \
-             from a backward filter, not in Oh & Jung): {}. It beats the GCV smoothing spline \
-             ({}) by {} px per gap, a small margin; {} GDT as Oh & Jung define it (goal: B's first \
-             observation) loses to every fair spline: {} against {} for the smoothing spline \
-             (paired difference {} px), {} for the window B-spline with n chosen per scene and \
-             {} for the window cubic. A window B-spline whose n was fixed on the truth of \
-             tuning scenes (seed 7) is not distinguishable from ours ({}, difference {} px), so \
-             ours wins against what a practitioner can tune from the observations, not against \
-             every spline. Noise estimated by maximum likelihood costs nothing measurable: the \
-             oracle-noise rows differ from the ML rows by {} px (goal state). Oh & Jung report \
-             MMAE 2.21 px (GDT) against 2.77 (cubic spline) and 2.84 (B-spline) on PETS2009 \
-             S2L1; their ordering comes from splines that interpolate the noise or underfit \
-             (our last two rows) and does not hold against fairly tuned splines.",
-            out.n_runs,
-            out.n_runs - 1,
-            fmt_num(out.n_walkers as f64 / out.n_runs as f64),
-            out.n_frames,
-            out.width,
-            out.height,
-            hi.x - lo.x,
-            hi.y - lo.y,
-            out.cases.len(),
-            out.gap_frames[0],
-            out.gap_frames[1],
-            out.n_hidden,
-            out.n_dropped,
-            median_window(0),
-            median_window(1),
-            METHODS[best].1,
-            pm(
-                out.methods[best].mmae.euclidean,
-                out.methods[best].mmae_ci95
-            ),
-            m("gdt_goal_state_ml"),
-            m("smoothing_spline_gcv"),
-            d("smoothing_spline_gcv"),
-            {
-                let ties = spline_ties(out);
-                if ties.is_empty() {
-                    "ours has the lower mean in every gap-length bin.".to_string()
-                } else {
-                    format!(
-                        "not in every gap-length bin: the spline's mean is at or below ours for \
-                         gaps of {} frames.",
-                        ties.join(", ")
-                    )
-                }
-            },
-            m("gdt_ml"),
-            m("smoothing_spline_gcv"),
-            pm(dg, dg_ci),
-            m("window_bspline_scene_cv"),
-            m("window_cubic_scene_cv"),
-            m("window_bspline_tuned"),
-            d("window_bspline_tuned"),
-            d("gdt_goal_state_oracle"),
-        );
         Section {
             title: "Goal-directed gap recovery against spline baselines".into(),
-            summary,
-            tables: vec![table, paired, length_table(out), noise, timing],
+            summary: summary(out),
+            tables: vec![
+                error_table(out),
+                paired_table(out),
+                length_table(out),
+                noise_table(out),
+                timing_table(out),
+            ],
             figures: vec![
                 Figure::new(
                     "length",
@@ -661,6 +629,109 @@ impl Pipeline for GdtGaps {
     }
 }
 
+/// The report's summary: the scenes, what every fair method sees, and the result against Oh &
+/// Jung's (2015) ordering, with the numbers of the tables.
+fn summary(out: &Output) -> String {
+    let (lo, hi) = (out.mask_lower, out.mask_upper);
+    let best = best_fair(out);
+    let m = |key: &str| mmae_pm(out, key);
+    let d = |key: &str| difference_pm(out, key);
+    let (dg, dg_ci) = paired_difference(out, method("gdt_ml"), method("smoothing_spline_gcv"));
+    format!(
+        "{} scenes (generator streams 0–{} of the scenario seed) with {} walkers on average \
+         over {} frames each in a {}×{} image; a {}×{} mask hides each crossing. {} crossings \
+         of {}–{} frames ({} hidden positions) are scored; {} crossings outside that range \
+         (or with fewer than 3 observations on a side) are not. MMAE is mean ± 95 % CI \
+         (1.96·s/√n over gaps); differences are paired over the same gaps. Every fair \
+         method sees only the observed frames: GDT's noise (r, q) is a maximum-likelihood \
+         estimate over the two segments, the smoothing spline's λ is chosen by GCV, the \
+         window fits' n by cross-validation on pseudo-gaps of the same length cut inside \
+         the segments (per gap, or summed over a scene's gaps: median n {} for the B-spline \
+         and {} for the cubic). No reported seed was used for tuning. Result: the best fair \
+         method is {} (MMAE {}). Ours is the goal-state variant (the goal is B's full state \
+         from a backward filter, not in Oh & Jung): {}. It beats the GCV smoothing spline \
+         ({}) by {} px per gap, a small margin; {} GDT as Oh & Jung define it (goal: B's first \
+         observation) loses to every fair spline: {} against {} for the smoothing spline \
+         (paired difference {} px), {} for the window B-spline with n chosen per scene and \
+         {} for the window cubic. A window B-spline whose n was fixed on the truth of \
+         tuning scenes (seed 7) is not distinguishable from ours ({}, difference {} px), so \
+         ours wins against what a practitioner can tune from the observations, not against \
+         every spline. Noise estimated by maximum likelihood costs nothing measurable: the \
+         oracle-noise rows differ from the ML rows by {} px (goal state). Oh & Jung report \
+         MMAE 2.21 px (GDT) against 2.77 (cubic spline) and 2.84 (B-spline) on PETS2009 \
+         S2L1; their ordering comes from splines that interpolate the noise or underfit \
+         (our last two rows) and does not hold against fairly tuned splines.",
+        out.n_runs,
+        out.n_runs - 1,
+        fmt_num(out.n_walkers as f64 / out.n_runs as f64),
+        out.n_frames,
+        out.width,
+        out.height,
+        hi.x - lo.x,
+        hi.y - lo.y,
+        out.cases.len(),
+        out.gap_frames[0],
+        out.gap_frames[1],
+        out.n_hidden,
+        out.n_dropped,
+        median_window(out, 0),
+        median_window(out, 1),
+        METHODS[best].1,
+        pm(
+            out.methods[best].mmae.euclidean,
+            out.methods[best].mmae_ci95
+        ),
+        m("gdt_goal_state_ml"),
+        m("smoothing_spline_gcv"),
+        d("smoothing_spline_gcv"),
+        ties_sentence(out),
+        m("gdt_ml"),
+        m("smoothing_spline_gcv"),
+        pm(dg, dg_ci),
+        m("window_bspline_scene_cv"),
+        m("window_cubic_scene_cv"),
+        m("window_bspline_tuned"),
+        d("window_bspline_tuned"),
+        d("gdt_goal_state_oracle"),
+    )
+}
+
+/// A method's MMAE ± 95 % CI, as the summary quotes it.
+fn mmae_pm(out: &Output, key: &str) -> String {
+    let r = &out.methods[method(key)];
+    pm(r.mmae.euclidean, r.mmae_ci95)
+}
+
+/// A method's paired per-gap MAE difference to the goal-state GDT (ours), as the summary
+/// quotes it.
+fn difference_pm(out: &Output, key: &str) -> String {
+    let (d, ci) = paired_difference(out, method(key), method("gdt_goal_state_ml"));
+    pm(d, ci)
+}
+
+/// The median window n chosen per scene by cross-validation (slot 0 the B-spline, 1 the
+/// cubic).
+fn median_window(out: &Output, slot: usize) -> usize {
+    let mut ns: Vec<usize> = out.scene_windows.iter().map(|w| w[slot]).collect();
+    ns.sort_unstable();
+    ns.get(ns.len() / 2).copied().unwrap_or(0)
+}
+
+/// The summary's sentence on the gap-length bins where the GCV smoothing spline is at or
+/// below ours.
+fn ties_sentence(out: &Output) -> String {
+    let ties = spline_ties(out);
+    if ties.is_empty() {
+        "ours has the lower mean in every gap-length bin.".to_string()
+    } else {
+        format!(
+            "not in every gap-length bin: the spline's mean is at or below ours for \
+             gaps of {} frames.",
+            ties.join(", ")
+        )
+    }
+}
+
 /// Median of the ML noise estimates (r, q) over the gaps.
 fn noise_medians(out: &Output) -> (f64, f64) {
     let median = |mut xs: Vec<f64>| {
@@ -712,9 +783,26 @@ fn pm(mean: f64, ci: f64) -> String {
     format!("{} ± {}", fmt_num(mean), fmt_num(ci))
 }
 
-/// The error table (Oh & Jung 2015, Table 1), the paired differences, the noise estimates and
-/// the timing table (Table 2).
-fn tables(out: &Output) -> (Table, Table, Table, Table) {
+/// How a method's noise or smoothing is set, for the error table's "noise / tuning" column.
+fn tuning(key: &str) -> &'static str {
+    match key {
+        "gdt_goal_state_ml" | "gdt_ml" => "r, q by ML on the segments",
+        "smoothing_spline_gcv" => "λ by GCV on the segments",
+        "window_bspline_cv" | "window_cubic_cv" => "n by CV on the gap's observations",
+        "window_bspline_scene_cv" | "window_cubic_scene_cv" => {
+            "n by CV on the scene's observations"
+        }
+        "gdt_goal_state_oracle" | "gdt_oracle" => "oracle: simulator σ², hand-set q",
+        "window_bspline_tuned" | "window_cubic_tuned" => "n fixed on tuning scenes' truth",
+        "cubic_spline" => "interpolates every observation",
+        "b_spline" => "fixed knots per side",
+        _ => "none",
+    }
+}
+
+/// The error table in the format of Oh & Jung (2015), Table 1: MAE per axis, both Totals and
+/// MMAE ± 95 % CI per method.
+fn error_table(out: &Output) -> Table {
     let mut table = Table::new(
         &format!(
             "Recovery error in pixels over {} masked crossings of {}–{} frames ({} hidden positions) \
@@ -736,31 +824,6 @@ fn tables(out: &Output) -> (Table, Table, Table, Table) {
             "MMAE (Euclidean)",
         ],
     );
-    let tuning = |key: &str| match key {
-        "gdt_goal_state_ml" | "gdt_ml" => "r, q by ML on the segments",
-        "smoothing_spline_gcv" => "λ by GCV on the segments",
-        "window_bspline_cv" | "window_cubic_cv" => "n by CV on the gap's observations",
-        "window_bspline_scene_cv" | "window_cubic_scene_cv" => {
-            "n by CV on the scene's observations"
-        }
-        "gdt_goal_state_oracle" | "gdt_oracle" => "oracle: simulator σ², hand-set q",
-        "window_bspline_tuned" | "window_cubic_tuned" => "n fixed on tuning scenes' truth",
-        "cubic_spline" => "interpolates every observation",
-        "b_spline" => "fixed knots per side",
-        _ => "none",
-    };
-    let mut paired = Table::new(
-        "Per-gap MAE difference to the goal-state GDT with ML noise (ours), mean ± 95 % CI over \
-         the same gaps; positive: the method errs more than ours",
-        &["method", "Δ MMAE (px)", "gaps where it beats ours"],
-    );
-    let mut timing = Table::new(
-        "Execution time per gap (Oh & Jung 2015, Table 2 format; wall clock in the build that \
-         ran the report, two threads; the ML rows include the noise search, the per-gap CV \
-         rows their cross-validation; the per-scene rows exclude the scene's cross-validation)",
-        &["method", "µs per gap"],
-    );
-    let goal = method("gdt_goal_state_ml");
     for ((key, name, _), r) in METHODS.iter().zip(&out.methods) {
         table.row(vec![
             (*name).into(),
@@ -771,6 +834,20 @@ fn tables(out: &Output) -> (Table, Table, Table, Table) {
             fmt_num(r.pooled.axis_mean),
             pm(r.mmae.euclidean, r.mmae_ci95),
         ]);
+    }
+    table
+}
+
+/// The paired table: each method's per-gap MAE difference to the goal-state GDT with ML
+/// noise (ours) over the same gaps, and the gaps where it beats ours.
+fn paired_table(out: &Output) -> Table {
+    let mut paired = Table::new(
+        "Per-gap MAE difference to the goal-state GDT with ML noise (ours), mean ± 95 % CI over \
+         the same gaps; positive: the method errs more than ours",
+        &["method", "Δ MMAE (px)", "gaps where it beats ours"],
+    );
+    let goal = method("gdt_goal_state_ml");
+    for (key, name, _) in METHODS.iter() {
         let k = method(key);
         if k != goal {
             let (d, ci) = paired_difference(out, k, goal);
@@ -785,8 +862,28 @@ fn tables(out: &Output) -> (Table, Table, Table, Table) {
                 format!("{wins} of {}", out.cases.len()),
             ]);
         }
+    }
+    paired
+}
+
+/// The timing table in the format of Oh & Jung (2015), Table 2: wall-clock microseconds per
+/// gap per method.
+fn timing_table(out: &Output) -> Table {
+    let mut timing = Table::new(
+        "Execution time per gap (Oh & Jung 2015, Table 2 format; wall clock in the build that \
+         ran the report, two threads; the ML rows include the noise search, the per-gap CV \
+         rows their cross-validation; the per-scene rows exclude the scene's cross-validation)",
+        &["method", "µs per gap"],
+    );
+    for ((_, name, _), r) in METHODS.iter().zip(&out.methods) {
         timing.row(vec![(*name).into(), fmt_num(r.micros)]);
     }
+    timing
+}
+
+/// The noise table: GDT's maximum-likelihood (r, q) over the two segments of each gap
+/// (median and quartiles over gaps) beside the oracle rows' values.
+fn noise_table(out: &Output) -> Table {
     let mut noise = Table::new(
         "GDT's noise: maximum-likelihood estimates over the two segments of each gap (median and \
          quartiles over gaps) against the oracle rows' values",
@@ -807,7 +904,7 @@ fn tables(out: &Output) -> (Table, Table, Table, Table) {
         format!("{}–{}", fmt_num(q25), fmt_num(q75)),
         "hand-set (scenario file)".into(),
     ]);
-    (table, paired, timing, noise)
+    noise
 }
 
 /// Gap-length bins of the length chart: [5, 10), [10, 15), … up to the longest gap.

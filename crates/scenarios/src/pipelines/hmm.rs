@@ -373,6 +373,87 @@ fn score(
     })
 }
 
+/// The map's state space: the crossroads of a road graph or the free cells of a grid (Huynh &
+/// Vu 2006 track on both).
+fn state_space(map: &MapParams) -> Result<StateSpace> {
+    Ok(match map {
+        MapParams::Road { crossroads, roads } => StateSpace::from_road_graph(
+            crossroads.iter().map(|c| Vec2::new(c[0], c[1])).collect(),
+            &roads.iter().map(|r| (r[0], r[1])).collect::<Vec<_>>(),
+        )?,
+        MapParams::Grid(grid) => StateSpace::from_grid(grid)?,
+    })
+}
+
+/// Every replicate, in parallel: replicate r draws from stream r of one generator seeded from
+/// the scenario's (one draw of `rng`); results are collected in replicate order.
+fn run_replicates(
+    p: &Params,
+    space: &StateSpace,
+    models: (&Hmm, &Hmm),
+    trainer: &hmm_grid::BaumWelch,
+    rng: &mut ChaCha8Rng,
+    env: &Env<'_>,
+) -> Result<Vec<Replicate>> {
+    let base: u64 = rng.random();
+    env.progress
+        .set_length((p.n_seeds * p.train_sizes.len()) as u64);
+    (0..p.n_seeds)
+        .into_par_iter()
+        .map(|r| {
+            let mut r_rng = ChaCha8Rng::seed_from_u64(base);
+            r_rng.set_stream(r as u64);
+            replicate(p, space, models, trainer, &mut r_rng, env)
+        })
+        .collect::<Result<Vec<_>>>()
+}
+
+/// The non-learned model, the model learned from the largest K (index `last_k`) and the true
+/// model, each summarised over the replicates: the three rows of Huynh & Vu's (2006)
+/// comparison.
+fn model_scores(replicates: &[Replicate], last_k: usize) -> Vec<ModelScore> {
+    vec![
+        summarise(
+            "non-learned",
+            "nonlearned",
+            &replicates.iter().map(|r| &r.nonlearned).collect::<Vec<_>>(),
+        ),
+        summarise(
+            "learned (Baum-Welch)",
+            "learned",
+            &replicates
+                .iter()
+                .map(|r| &r.fits[last_k].score)
+                .collect::<Vec<_>>(),
+        ),
+        summarise(
+            "true model",
+            "true",
+            &replicates.iter().map(|r| &r.truth).collect::<Vec<_>>(),
+        ),
+    ]
+}
+
+/// The learning curve: for every K of `train_sizes`, the Baum-Welch iterations, the
+/// replicates that converged, and the learned model's errors and test log-likelihood.
+fn sweep_points(p: &Params, replicates: &[Replicate]) -> Vec<SweepPoint> {
+    p.train_sizes
+        .iter()
+        .enumerate()
+        .map(|(i, &k)| {
+            let fits = || replicates.iter().map(|r| &r.fits[i]);
+            SweepPoint {
+                k,
+                iterations: mean_ci(fits().map(|f| f.iterations as f64)),
+                converged: fits().filter(|f| f.converged).count(),
+                viterbi: mean_ci(fits().map(|f| mean(&f.score.viterbi_curve))),
+                posterior: mean_ci(fits().map(|f| mean(&f.score.posterior_curve))),
+                log_likelihood_per_step: mean_ci(fits().map(|f| f.score.log_likelihood_per_step)),
+            }
+        })
+        .collect()
+}
+
 impl Pipeline for HmmTracking {
     type Params = Params;
     type Output = Output;
@@ -388,69 +469,13 @@ impl Pipeline for HmmTracking {
             "need training and test sequences"
         );
         let n_train = *p.train_sizes.last().unwrap_or(&0);
-        let space = match &p.map {
-            MapParams::Road { crossroads, roads } => StateSpace::from_road_graph(
-                crossroads.iter().map(|c| Vec2::new(c[0], c[1])).collect(),
-                &roads.iter().map(|r| (r[0], r[1])).collect::<Vec<_>>(),
-            )?,
-            MapParams::Grid(grid) => StateSpace::from_grid(grid)?,
-        };
+        let space = state_space(&p.map)?;
         anyhow::ensure!(p.n_seeds > 0, "n_seeds must be positive");
         let (truth, naive) = build_models(p, &space, rng)?;
         let trainer = trainer(p)?;
-        // Replicate r draws from stream r of one generator seeded from the scenario's, in
-        // parallel; results are collected in replicate order.
-        let base: u64 = rng.random();
-        env.progress
-            .set_length((p.n_seeds * p.train_sizes.len()) as u64);
-        let replicates = (0..p.n_seeds)
-            .into_par_iter()
-            .map(|r| {
-                let mut r_rng = ChaCha8Rng::seed_from_u64(base);
-                r_rng.set_stream(r as u64);
-                replicate(p, &space, (&truth, &naive), &trainer, &mut r_rng, env)
-            })
-            .collect::<Result<Vec<_>>>()?;
+        let replicates = run_replicates(p, &space, (&truth, &naive), &trainer, rng, env)?;
         let first = replicates.first().context("no replicate")?;
         let last_k = p.train_sizes.len() - 1;
-        let models = vec![
-            summarise(
-                "non-learned",
-                "nonlearned",
-                &replicates.iter().map(|r| &r.nonlearned).collect::<Vec<_>>(),
-            ),
-            summarise(
-                "learned (Baum-Welch)",
-                "learned",
-                &replicates
-                    .iter()
-                    .map(|r| &r.fits[last_k].score)
-                    .collect::<Vec<_>>(),
-            ),
-            summarise(
-                "true model",
-                "true",
-                &replicates.iter().map(|r| &r.truth).collect::<Vec<_>>(),
-            ),
-        ];
-        let sweep = p
-            .train_sizes
-            .iter()
-            .enumerate()
-            .map(|(i, &k)| {
-                let fits = || replicates.iter().map(|r| &r.fits[i]);
-                SweepPoint {
-                    k,
-                    iterations: mean_ci(fits().map(|f| f.iterations as f64)),
-                    converged: fits().filter(|f| f.converged).count(),
-                    viterbi: mean_ci(fits().map(|f| mean(&f.score.viterbi_curve))),
-                    posterior: mean_ci(fits().map(|f| mean(&f.score.posterior_curve))),
-                    log_likelihood_per_step: mean_ci(
-                        fits().map(|f| f.score.log_likelihood_per_step),
-                    ),
-                }
-            })
-            .collect();
         Ok(Output {
             is_road: matches!(p.map, MapParams::Road { .. }),
             n_train,
@@ -462,8 +487,8 @@ impl Pipeline for HmmTracking {
             relative_tolerance: p.bw_relative_tolerance,
             note: p.note.clone(),
             true_path: first.true_path.clone(),
-            models,
-            sweep,
+            models: model_scores(&replicates, last_k),
+            sweep: sweep_points(p, &replicates),
             log_likelihoods: first.fits[last_k].log_likelihoods.clone(),
             space,
         })

@@ -123,74 +123,105 @@ impl Output {
         rows.iter().sum::<f64>() / rows.len().max(1) as f64
     }
 
-    /// (key, statement, holds) of every ordering.
+    /// The peer's means the orderings compare against.
+    fn peer_means(&self) -> PeerMeans {
+        let best = |trackers: [&str; 2], output: &str, f: fn(&PeerRow) -> f64| {
+            trackers
+                .map(|t| self.peer_mean(t, output, f))
+                .into_iter()
+                .fold(f64::NEG_INFINITY, f64::max)
+        };
+        PeerMeans {
+            best_off_mota: best(["gnn", "jpda"], "offline", |r| r.mota),
+            best_off_idf1: best(["gnn", "jpda"], "offline", |r| r.idf1),
+            online_gnn: self.peer_mean("gnn", "online", |r| r.mota),
+            gnn_best: ["online", "offline"]
+                .map(|o| self.peer_mean("gnn", o, |r| r.mota))
+                .into_iter()
+                .fold(f64::NEG_INFINITY, f64::max),
+            gnn_ms: self.peer_mean("gnn", "online", |r| r.ms_per_frame),
+            best_online: best(["gnn", "jpda"], "online", |r| r.mota),
+        }
+    }
+
+    /// Our mean MOTA of one tracker over the sequences.
+    fn mota(&self, t: TrackerKind) -> f64 {
+        self.mean(t, |s| s.mota).0
+    }
+
+    /// (key, statement, holds) of every ordering, in the order of [`ORDERINGS`].
     fn orderings(&self) -> Vec<(&'static str, String, bool)> {
-        let mota = |t| self.mean(t, |s| s.mota).0;
-        let idf1 = |t| self.mean(t, |s| s.idf1).0;
-        let best_off_mota = ["gnn", "jpda"]
-            .map(|t| self.peer_mean(t, "offline", |r| r.mota))
-            .into_iter()
-            .fold(f64::NEG_INFINITY, f64::max);
-        let best_off_idf1 = ["gnn", "jpda"]
-            .map(|t| self.peer_mean(t, "offline", |r| r.idf1))
-            .into_iter()
-            .fold(f64::NEG_INFINITY, f64::max);
-        let peer_online_gnn = self.peer_mean("gnn", "online", |r| r.mota);
-        let peer_gnn_best = ["online", "offline"]
-            .map(|o| self.peer_mean("gnn", o, |r| r.mota))
-            .into_iter()
-            .fold(f64::NEG_INFINITY, f64::max);
-        let peer_gnn_ms = self.peer_mean("gnn", "online", |r| r.ms_per_frame);
-        let best_online = ["gnn", "jpda"]
-            .map(|t| self.peer_mean(t, "online", |r| r.mota))
-            .into_iter()
-            .fold(f64::NEG_INFINITY, f64::max);
-        let gnn_ms = self.mean(TrackerKind::Gnn, |s| s.ms_per_frame).0;
+        let peer = self.peer_means();
+        let mut all = self.offline_orderings(&peer);
+        all.extend(self.online_orderings(&peer));
+        all.extend(self.gnn_orderings(&peer));
+        all.extend(self.mcmcda_orderings(&peer));
+        all.extend(self.gnn_online_orderings(&peer));
+        all
+    }
+
+    /// Orderings 0–1: offline MCMCDA's MOTA and IDF1 against the tuned peer's best offline
+    /// output.
+    fn offline_orderings(&self, peer: &PeerMeans) -> Vec<(&'static str, String, bool)> {
+        let idf1 = self.mean(TrackerKind::Mcmcda, |s| s.idf1).0;
         vec![
             (
                 ORDERINGS[0],
                 format!(
                     "offline MCMCDA's mean MOTA ({}) ≥ the tuned peer's best offline mean MOTA ({})",
-                    fmt_num(mota(TrackerKind::Mcmcda)),
-                    fmt_num(best_off_mota)
+                    fmt_num(self.mota(TrackerKind::Mcmcda)),
+                    fmt_num(peer.best_off_mota)
                 ),
-                mota(TrackerKind::Mcmcda) >= best_off_mota,
+                self.mota(TrackerKind::Mcmcda) >= peer.best_off_mota,
             ),
             (
                 ORDERINGS[1],
                 format!(
                     "offline MCMCDA's mean IDF1 ({}) ≥ the tuned peer's best offline mean IDF1 ({})",
-                    fmt_num(idf1(TrackerKind::Mcmcda)),
-                    fmt_num(best_off_idf1)
+                    fmt_num(idf1),
+                    fmt_num(peer.best_off_idf1)
                 ),
-                idf1(TrackerKind::Mcmcda) >= best_off_idf1,
+                idf1 >= peer.best_off_idf1,
             ),
+        ]
+    }
+
+    /// Orderings 2–3: the online PHD tracker and online MCMCDA against the peer's online GNN.
+    fn online_orderings(&self, peer: &PeerMeans) -> Vec<(&'static str, String, bool)> {
+        vec![
             (
                 ORDERINGS[2],
                 format!(
                     "the PHD tracker's mean MOTA ({}) ≥ the peer's online GNN ({})",
-                    fmt_num(mota(TrackerKind::Phd)),
-                    fmt_num(peer_online_gnn)
+                    fmt_num(self.mota(TrackerKind::Phd)),
+                    fmt_num(peer.online_gnn)
                 ),
-                mota(TrackerKind::Phd) >= peer_online_gnn,
+                self.mota(TrackerKind::Phd) >= peer.online_gnn,
             ),
             (
                 ORDERINGS[3],
                 format!(
                     "online MCMCDA's mean MOTA ({}) ≥ the peer's online GNN ({})",
-                    fmt_num(mota(TrackerKind::McmcdaOnline)),
-                    fmt_num(peer_online_gnn)
+                    fmt_num(self.mota(TrackerKind::McmcdaOnline)),
+                    fmt_num(peer.online_gnn)
                 ),
-                mota(TrackerKind::McmcdaOnline) >= peer_online_gnn,
+                self.mota(TrackerKind::McmcdaOnline) >= peer.online_gnn,
             ),
+        ]
+    }
+
+    /// Orderings 4–5: our GNN against the peer's GNN, in MOTA (best output) and in time.
+    fn gnn_orderings(&self, peer: &PeerMeans) -> Vec<(&'static str, String, bool)> {
+        let gnn_ms = self.mean(TrackerKind::Gnn, |s| s.ms_per_frame).0;
+        vec![
             (
                 ORDERINGS[4],
                 format!(
                     "GNN's mean MOTA ({}) is at least the peer's GNN (best output, {}) − 0.01",
-                    fmt_num(mota(TrackerKind::Gnn)),
-                    fmt_num(peer_gnn_best)
+                    fmt_num(self.mota(TrackerKind::Gnn)),
+                    fmt_num(peer.gnn_best)
                 ),
-                mota(TrackerKind::Gnn) >= peer_gnn_best - 0.01,
+                self.mota(TrackerKind::Gnn) >= peer.gnn_best - 0.01,
             ),
             (
                 ORDERINGS[5],
@@ -198,49 +229,78 @@ impl Output {
                     "GNN's time per frame ({} ms, model fit included, dev profile) ≤ 1/20 of the \
                      peer GNN's ({} ms)",
                     fmt_num(gnn_ms),
-                    fmt_num(peer_gnn_ms)
+                    fmt_num(peer.gnn_ms)
                 ),
-                gnn_ms <= peer_gnn_ms / 20.0,
+                gnn_ms <= peer.gnn_ms / 20.0,
             ),
+        ]
+    }
+
+    /// Orderings 6–7: offline MCMCDA against the peer's best online output and against our
+    /// GNN on the same fitted model.
+    fn mcmcda_orderings(&self, peer: &PeerMeans) -> Vec<(&'static str, String, bool)> {
+        vec![
             (
                 ORDERINGS[6],
                 format!(
                     "offline MCMCDA's mean MOTA ({}) ≥ the peer's best online mean MOTA ({})",
-                    fmt_num(mota(TrackerKind::Mcmcda)),
-                    fmt_num(best_online)
+                    fmt_num(self.mota(TrackerKind::Mcmcda)),
+                    fmt_num(peer.best_online)
                 ),
-                mota(TrackerKind::Mcmcda) >= best_online,
+                self.mota(TrackerKind::Mcmcda) >= peer.best_online,
             ),
             (
                 ORDERINGS[7],
                 format!(
                     "offline MCMCDA's mean MOTA ({}) > our GNN's ({}) on the same fitted model",
-                    fmt_num(mota(TrackerKind::Mcmcda)),
-                    fmt_num(mota(TrackerKind::Gnn))
+                    fmt_num(self.mota(TrackerKind::Mcmcda)),
+                    fmt_num(self.mota(TrackerKind::Gnn))
                 ),
-                mota(TrackerKind::Mcmcda) > mota(TrackerKind::Gnn),
+                self.mota(TrackerKind::Mcmcda) > self.mota(TrackerKind::Gnn),
             ),
+        ]
+    }
+
+    /// Orderings 8–9: our GNN, smoothed and online, against the peer's online GNN.
+    fn gnn_online_orderings(&self, peer: &PeerMeans) -> Vec<(&'static str, String, bool)> {
+        vec![
             (
                 ORDERINGS[8],
                 format!(
                     "GNN's mean MOTA ({}) is at least the peer's online GNN ({}) − 0.01",
-                    fmt_num(mota(TrackerKind::Gnn)),
-                    fmt_num(peer_online_gnn)
+                    fmt_num(self.mota(TrackerKind::Gnn)),
+                    fmt_num(peer.online_gnn)
                 ),
-                mota(TrackerKind::Gnn) >= peer_online_gnn - 0.01,
+                self.mota(TrackerKind::Gnn) >= peer.online_gnn - 0.01,
             ),
             (
                 ORDERINGS[9],
                 format!(
                     "online GNN's mean MOTA ({}, frame-by-frame output with coasting, like the \
                      peer's) is at least the peer's online GNN ({}) − 0.01",
-                    fmt_num(mota(TrackerKind::GnnOnline)),
-                    fmt_num(peer_online_gnn)
+                    fmt_num(self.mota(TrackerKind::GnnOnline)),
+                    fmt_num(peer.online_gnn)
                 ),
-                mota(TrackerKind::GnnOnline) >= peer_online_gnn - 0.01,
+                self.mota(TrackerKind::GnnOnline) >= peer.online_gnn - 0.01,
             ),
         ]
     }
+}
+
+/// The peer's (Stone Soup's) means over the reported sequences that the orderings compare
+/// against (`docs/comparisons/stonesoup_realistic.py`).
+struct PeerMeans {
+    /// Best offline mean MOTA and IDF1 of GNN and JPDA.
+    best_off_mota: f64,
+    best_off_idf1: f64,
+    /// Online GNN's mean MOTA.
+    online_gnn: f64,
+    /// GNN's mean MOTA, the better of its online and offline outputs.
+    gnn_best: f64,
+    /// Online GNN's time per frame.
+    gnn_ms: f64,
+    /// Best online mean MOTA of GNN and JPDA.
+    best_online: f64,
 }
 
 impl Pipeline for MotRealistic {
@@ -326,116 +386,6 @@ impl Pipeline for MotRealistic {
     }
 
     fn present(out: &Output) -> Section {
-        let mut table = Table::new(
-            "Mean over the reported sequences (± 95 % CI over sequences); time per frame \
-             includes the model fit (ours, dev profile, sequences in parallel) or is Stone \
-             Soup's tracking loop alone",
-            &[
-                "tracker",
-                "MOTA",
-                "IDF1",
-                "IDSW / 100 frames",
-                "ms per frame",
-            ],
-        );
-        let pm = |(m, h): (f64, f64)| format!("{} ± {}", fmt_num(m), fmt_num(h));
-        let n_frames: f64 = out.frames.iter().map(|&f| f64::from(f)).sum();
-        for &t in &out.params.trackers {
-            let idsw: f64 = out.of(t).map(|s| s.idsw).sum();
-            table.row(vec![
-                format!("ours: {t}"),
-                pm(out.mean(t, |s| s.mota)),
-                pm(out.mean(t, |s| s.idf1)),
-                fmt_num(100.0 * idsw / n_frames),
-                fmt_num(out.mean(t, |s| s.ms_per_frame).0),
-            ]);
-        }
-        for (tracker, output) in [
-            ("gnn", "online"),
-            ("gnn", "offline"),
-            ("jpda", "online"),
-            ("jpda", "offline"),
-        ] {
-            let rows: Vec<&PeerRow> = out
-                .params
-                .peer
-                .iter()
-                .filter(|r| r.tracker == tracker && r.output == output)
-                .collect();
-            if rows.is_empty() {
-                continue;
-            }
-            let idsw: f64 = rows.iter().map(|r| r.idsw).sum();
-            table.row(vec![
-                format!("Stone Soup {tracker} ({output}, tuned)"),
-                pm(mean_ci(rows.iter().map(|r| r.mota))),
-                pm(mean_ci(rows.iter().map(|r| r.idf1))),
-                fmt_num(100.0 * idsw / n_frames),
-                fmt_num(mean_ci(rows.iter().map(|r| r.ms_per_frame)).0),
-            ]);
-        }
-        let mut per_seq = Table::new(
-            "Per sequence",
-            &[
-                "sequence",
-                "frames",
-                "truth boxes",
-                "tracker",
-                "tracks",
-                "MOTA",
-                "IDF1",
-                "IDSW",
-                "FP",
-                "FN",
-            ],
-        );
-        for s in &out.scores {
-            let spec = &out.params.sequences[s.sequence];
-            per_seq.row(vec![
-                format!("{} ({} fps)", spec.name, spec.fps),
-                out.frames[s.sequence].to_string(),
-                out.truth_boxes[s.sequence].to_string(),
-                s.tracker.to_string(),
-                s.tracks.to_string(),
-                fmt_num(s.mota),
-                fmt_num(s.idf1),
-                s.idsw.to_string(),
-                s.false_positives.to_string(),
-                s.false_negatives.to_string(),
-            ]);
-        }
-        for r in &out.params.peer {
-            per_seq.row(vec![
-                r.sequence.clone(),
-                String::new(),
-                String::new(),
-                format!("Stone Soup {} ({})", r.tracker, r.output),
-                String::new(),
-                fmt_num(r.mota),
-                fmt_num(r.idf1),
-                r.idsw.to_string(),
-                String::new(),
-                String::new(),
-            ]);
-        }
-        let mut orderings = Table::new(
-            "The orderings (claimed ones are checked by the suite; an unclaimed one either \
-             fails, where we lose, or compares our output, smoothed over the whole file, with \
-             the peer's online output)",
-            &["ordering", "holds", "claimed"],
-        );
-        for (key, statement, holds) in out.orderings() {
-            orderings.row(vec![
-                statement,
-                if holds { "yes" } else { "no" }.into(),
-                if out.params.claimed.iter().any(|c| c == key) {
-                    "yes"
-                } else {
-                    "no"
-                }
-                .into(),
-            ]);
-        }
         Section {
             title: "Trackers on realistic pedestrian detections (mot-realistic)".into(),
             summary: format!(
@@ -445,7 +395,11 @@ impl Pipeline for MotRealistic {
                  the tuning sequences (docs/comparisons/stonesoup_realistic.py).",
                 out.params.sequences.len()
             ),
-            tables: vec![table, orderings, per_seq],
+            tables: vec![
+                mean_table(out),
+                orderings_table(out),
+                per_sequence_table(out),
+            ],
             figures: vec![],
         }
     }
@@ -479,4 +433,137 @@ impl Pipeline for MotRealistic {
             },
         ]
     }
+}
+
+/// "mean ± half-width" of a (mean, 95 % half-width) pair.
+fn pm((m, h): (f64, f64)) -> String {
+    format!("{} ± {}", fmt_num(m), fmt_num(h))
+}
+
+/// The mean table: each of our trackers and each of Stone Soup's tuned trackers
+/// (`docs/comparisons/stonesoup_realistic.py`) over the reported sequences, MOTA and IDF1 ±
+/// 95 % CI, ID switches per 100 frames and time per frame.
+fn mean_table(out: &Output) -> Table {
+    let mut table = Table::new(
+        "Mean over the reported sequences (± 95 % CI over sequences); time per frame \
+         includes the model fit (ours, dev profile, sequences in parallel) or is Stone \
+         Soup's tracking loop alone",
+        &[
+            "tracker",
+            "MOTA",
+            "IDF1",
+            "IDSW / 100 frames",
+            "ms per frame",
+        ],
+    );
+    let n_frames: f64 = out.frames.iter().map(|&f| f64::from(f)).sum();
+    for &t in &out.params.trackers {
+        let idsw: f64 = out.of(t).map(|s| s.idsw).sum();
+        table.row(vec![
+            format!("ours: {t}"),
+            pm(out.mean(t, |s| s.mota)),
+            pm(out.mean(t, |s| s.idf1)),
+            fmt_num(100.0 * idsw / n_frames),
+            fmt_num(out.mean(t, |s| s.ms_per_frame).0),
+        ]);
+    }
+    for (tracker, output) in [
+        ("gnn", "online"),
+        ("gnn", "offline"),
+        ("jpda", "online"),
+        ("jpda", "offline"),
+    ] {
+        let rows: Vec<&PeerRow> = out
+            .params
+            .peer
+            .iter()
+            .filter(|r| r.tracker == tracker && r.output == output)
+            .collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let idsw: f64 = rows.iter().map(|r| r.idsw).sum();
+        table.row(vec![
+            format!("Stone Soup {tracker} ({output}, tuned)"),
+            pm(mean_ci(rows.iter().map(|r| r.mota))),
+            pm(mean_ci(rows.iter().map(|r| r.idf1))),
+            fmt_num(100.0 * idsw / n_frames),
+            fmt_num(mean_ci(rows.iter().map(|r| r.ms_per_frame)).0),
+        ]);
+    }
+    table
+}
+
+/// The per-sequence table: every tracker's tracks, MOTA, IDF1, IDSW, FP and FN on each
+/// sequence, then the peer's recorded rows.
+fn per_sequence_table(out: &Output) -> Table {
+    let mut per_seq = Table::new(
+        "Per sequence",
+        &[
+            "sequence",
+            "frames",
+            "truth boxes",
+            "tracker",
+            "tracks",
+            "MOTA",
+            "IDF1",
+            "IDSW",
+            "FP",
+            "FN",
+        ],
+    );
+    for s in &out.scores {
+        let spec = &out.params.sequences[s.sequence];
+        per_seq.row(vec![
+            format!("{} ({} fps)", spec.name, spec.fps),
+            out.frames[s.sequence].to_string(),
+            out.truth_boxes[s.sequence].to_string(),
+            s.tracker.to_string(),
+            s.tracks.to_string(),
+            fmt_num(s.mota),
+            fmt_num(s.idf1),
+            s.idsw.to_string(),
+            s.false_positives.to_string(),
+            s.false_negatives.to_string(),
+        ]);
+    }
+    for r in &out.params.peer {
+        per_seq.row(vec![
+            r.sequence.clone(),
+            String::new(),
+            String::new(),
+            format!("Stone Soup {} ({})", r.tracker, r.output),
+            String::new(),
+            fmt_num(r.mota),
+            fmt_num(r.idf1),
+            r.idsw.to_string(),
+            String::new(),
+            String::new(),
+        ]);
+    }
+    per_seq
+}
+
+/// The orderings table: every ordering of [`ORDERINGS`] against the peer, whether it holds
+/// and whether the scenario claims it.
+fn orderings_table(out: &Output) -> Table {
+    let mut orderings = Table::new(
+        "The orderings (claimed ones are checked by the suite; an unclaimed one either \
+         fails, where we lose, or compares our output, smoothed over the whole file, with \
+         the peer's online output)",
+        &["ordering", "holds", "claimed"],
+    );
+    for (key, statement, holds) in out.orderings() {
+        orderings.row(vec![
+            statement,
+            if holds { "yes" } else { "no" }.into(),
+            if out.params.claimed.iter().any(|c| c == key) {
+                "yes"
+            } else {
+                "no"
+            }
+            .into(),
+        ]);
+    }
+    orderings
 }

@@ -416,6 +416,198 @@ fn check_params(p: &Params, seed: u64) -> Result<()> {
     Ok(())
 }
 
+/// Scenes 0..n of `seed` (stream i for scene i), built in parallel, in stream order.
+fn make_runs(config: &SceneConfig, seed: u64, n: usize) -> Result<Vec<Run>> {
+    (0..n as u64)
+        .into_par_iter()
+        .map(|i| make_run(config, seed, i))
+        .collect()
+}
+
+/// The baselines' filter and the global detector's quality on the tuning runs: as the
+/// fairness rules above ask, the baselines' p_D is the detector's recall measured there.
+struct Baseline {
+    /// The shared filter with p_D = the measured recall (clamped to [0.01, 0.99]).
+    filter: PhdConfig,
+    /// The global detector's recall on the tuning runs.
+    recall: f64,
+    /// Its false boxes per frame there.
+    false_per_frame: f64,
+}
+
+impl Baseline {
+    /// Measures the global detector on the tuning runs.
+    fn measure(p: &Params, tuning_runs: &[Run]) -> Self {
+        let (found, total) = tuning_runs
+            .iter()
+            .fold((0, 0), |(a, b), r| (a + r.found.0, b + r.found.1));
+        let recall = found as f64 / total.max(1) as f64;
+        let false_per_frame =
+            tuning_runs.iter().map(|r| r.false_per_frame).sum::<f64>() / tuning_runs.len() as f64;
+        let filter = PhdConfig {
+            p_detect: recall.clamp(0.01, 0.99),
+            ..p.filter
+        };
+        Self {
+            filter,
+            recall,
+            false_per_frame,
+        }
+    }
+}
+
+/// The tuning grid, (p_D, p_FA) of Yoon et al.'s (2016) eqs. 9-10 and the fused filter's p_D
+/// (the measured recall first), filter-p_D-major.
+fn grid_params(p: &Params, filter: &PhdConfig) -> Vec<(f64, f64, f64)> {
+    let mut filter_candidates = vec![filter.p_detect];
+    filter_candidates.extend(&p.tuning.fused_filter_p_detect);
+    let mut grid_params = Vec::new();
+    for &fp in &filter_candidates {
+        for &pd in &p.tuning.p_detect {
+            for &pfa in &p.tuning.p_false_alarm {
+                grid_params.push((pd, pfa, fp));
+            }
+        }
+    }
+    grid_params
+}
+
+/// The fused SMC-PHD of Yoon et al. (2016) at one grid point: the fused filter's p_D, the
+/// fusion's p_D and p_FA (eqs. 9-10), and the local detectors `local`.
+fn fused(
+    p: &Params,
+    filter: &PhdConfig,
+    (pd, pfa, fp): (f64, f64, f64),
+    local: LocalDetectorSim,
+) -> Method {
+    Method::Fused(
+        PhdConfig {
+            p_detect: fp,
+            ..*filter
+        },
+        FusionConfig {
+            p_detect: pd,
+            p_false_alarm: pfa,
+            ..p.fusion
+        },
+        local,
+    )
+}
+
+/// The fused method at the chosen grid point, with the local detectors `local`.
+fn fused_method(
+    p: &Params,
+    filter: &PhdConfig,
+    best: &GridPoint,
+    local: LocalDetectorSim,
+) -> Method {
+    fused(
+        p,
+        filter,
+        (best.p_detect, best.p_false_alarm, best.filter_p_detect),
+        local,
+    )
+}
+
+/// Tuning: every grid point on every tuning run, the one with the best mean MOTA kept (ties:
+/// the first in grid order). Returns the grid's results and the chosen index.
+fn tune(
+    p: &Params,
+    filter: &PhdConfig,
+    grid_params: &[(f64, f64, f64)],
+    tuning_runs: &[Run],
+    progress: &dyn Progress,
+) -> Result<(Vec<GridPoint>, usize)> {
+    let jobs: Vec<(usize, Method)> = grid_params
+        .iter()
+        .flat_map(|&g| (0..p.n_tuning_runs).map(move |i| (i, fused(p, filter, g, p.local))))
+        .collect();
+    let tuned = run_jobs(tuning_runs, &jobs, progress)?;
+    let grid: Vec<GridPoint> = grid_params
+        .iter()
+        .zip(tuned.chunks(p.n_tuning_runs))
+        .map(|(&(pd, pfa, fp), s)| GridPoint {
+            p_detect: pd,
+            p_false_alarm: pfa,
+            filter_p_detect: fp,
+            mota: mean_ci(s.iter().map(|x| x.mota)).mean,
+            sr: mean_ci(s.iter().map(|x| x.sr)).mean,
+            faf: mean_ci(s.iter().map(|x| x.faf)).mean,
+        })
+        .collect();
+    let chosen = grid.iter().enumerate().fold(
+        0,
+        |best, (i, g)| if g.mota > grid[best].mota { i } else { best },
+    );
+    Ok((grid, chosen))
+}
+
+/// The reported runs of the three methods (global-only SMC, fused SMC, GM), method-major;
+/// run 0 keeps its frames for the figures.
+fn report_runs(
+    p: &Params,
+    runs: &[Run],
+    methods: [Method; 3],
+    progress: &dyn Progress,
+) -> Result<([Vec<Score>; 3], [Kept; 3])> {
+    let jobs: Vec<(usize, Method)> = methods
+        .iter()
+        .flat_map(|m| (0..p.n_runs).map(move |i| (i, *m)))
+        .collect();
+    let results: Vec<(Score, Option<Kept>)> = jobs
+        .par_iter()
+        .map(|(i, m)| track(&runs[*i], *m, *i == 0, progress))
+        .collect::<Result<_>>()?;
+    let mut scores: [Vec<Score>; 3] = Default::default();
+    let mut kept: Vec<Kept> = Vec::new();
+    for (k, (s, f)) in results.into_iter().enumerate() {
+        scores[k / p.n_runs].push(s);
+        kept.extend(f);
+    }
+    let Ok(first) = <[Kept; 3]>::try_from(kept) else {
+        bail!("internal: expected the first run's frames of three methods");
+    };
+    Ok((scores, first))
+}
+
+/// The sweep: the fused filter with the tuned fusion parameters on the first `s.n_runs`
+/// reported scenes, over the local detector's detection and drift rates (drift-major), to
+/// show where the fusion of Yoon et al. (2016) stops helping. `global` holds the global-only
+/// scores of the reported runs.
+fn run_sweep(
+    p: &Params,
+    s: &Sweep,
+    filter: &PhdConfig,
+    best: &GridPoint,
+    runs: &[Run],
+    global: &[Score],
+    progress: &dyn Progress,
+) -> Result<SweepOut> {
+    let mut points = Vec::new();
+    let mut jobs = Vec::new();
+    for &drift in &s.p_drift {
+        for &pd in &s.local_p_detect {
+            let local = LocalDetectorSim {
+                p_detect: pd,
+                p_drift: drift,
+                ..p.local
+            };
+            points.push((pd, drift));
+            jobs.extend((0..s.n_runs).map(|i| (i, fused_method(p, filter, best, local))));
+        }
+    }
+    let out = run_jobs(runs, &jobs, progress)?;
+    Ok(SweepOut {
+        points: points
+            .into_iter()
+            .zip(out.chunks(s.n_runs))
+            .map(|((pd, d), c)| (pd, d, c.to_vec()))
+            .collect(),
+        global: global[..s.n_runs].to_vec(),
+        per_drift: s.local_p_detect.len(),
+    })
+}
+
 impl Pipeline for PhdPedestrians {
     type Params = Params;
     type Output = Output;
@@ -423,158 +615,42 @@ impl Pipeline for PhdPedestrians {
     fn compute(p: &Params, _rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Output> {
         let seed = env.seed;
         check_params(p, seed)?;
-        let make = |s: u64, n: usize| -> Result<Vec<Run>> {
-            (0..n as u64)
-                .into_par_iter()
-                .map(|i| make_run(&p.scene, s, i))
-                .collect()
-        };
-        let tuning_runs = make(p.tuning_seed, p.n_tuning_runs)?;
-        let runs = make(seed, p.n_runs)?;
-
-        // The baselines' p_D: the global detector's recall on the tuning runs.
-        let (found, total) = tuning_runs
-            .iter()
-            .fold((0, 0), |(a, b), r| (a + r.found.0, b + r.found.1));
-        let tuning_recall = found as f64 / total.max(1) as f64;
-        let tuning_false_per_frame =
-            tuning_runs.iter().map(|r| r.false_per_frame).sum::<f64>() / tuning_runs.len() as f64;
-        let filter = PhdConfig {
-            p_detect: tuning_recall.clamp(0.01, 0.99),
-            ..p.filter
-        };
-
-        let mut filter_candidates = vec![filter.p_detect];
-        filter_candidates.extend(&p.tuning.fused_filter_p_detect);
-        let mut grid_params = Vec::new();
-        for &fp in &filter_candidates {
-            for &pd in &p.tuning.p_detect {
-                for &pfa in &p.tuning.p_false_alarm {
-                    grid_params.push((pd, pfa, fp));
-                }
-            }
-        }
+        let tuning_runs = make_runs(&p.scene, p.tuning_seed, p.n_tuning_runs)?;
+        let runs = make_runs(&p.scene, seed, p.n_runs)?;
+        let baseline = Baseline::measure(p, &tuning_runs);
+        let filter = baseline.filter;
+        let grid_params = grid_params(p, &filter);
         let n_sweep = p.sweep.as_ref().map_or(0, |s| {
             s.n_runs * (1 + s.local_p_detect.len() * s.p_drift.len())
         });
         env.progress
             .set_length((grid_params.len() * p.n_tuning_runs + 3 * p.n_runs + n_sweep) as u64);
-
-        // Tuning: every grid point on every tuning run, best mean MOTA kept.
-        let fused = |pd: f64, pfa: f64, fp: f64, local: LocalDetectorSim| {
-            Method::Fused(
-                PhdConfig {
-                    p_detect: fp,
-                    ..filter
-                },
-                FusionConfig {
-                    p_detect: pd,
-                    p_false_alarm: pfa,
-                    ..p.fusion
-                },
-                local,
-            )
-        };
-        let jobs: Vec<(usize, Method)> = grid_params
-            .iter()
-            .flat_map(|&(pd, pfa, fp)| {
-                (0..p.n_tuning_runs).map(move |i| (i, fused(pd, pfa, fp, p.local)))
-            })
-            .collect();
-        let tuned = run_jobs(&tuning_runs, &jobs, env.progress)?;
-        let grid: Vec<GridPoint> = grid_params
-            .iter()
-            .zip(tuned.chunks(p.n_tuning_runs))
-            .map(|(&(pd, pfa, fp), s)| GridPoint {
-                p_detect: pd,
-                p_false_alarm: pfa,
-                filter_p_detect: fp,
-                mota: mean_ci(s.iter().map(|x| x.mota)).mean,
-                sr: mean_ci(s.iter().map(|x| x.sr)).mean,
-                faf: mean_ci(s.iter().map(|x| x.faf)).mean,
-            })
-            .collect();
-        let chosen =
-            grid.iter().enumerate().fold(
-                0,
-                |best, (i, g)| if g.mota > grid[best].mota { i } else { best },
-            );
+        let (grid, chosen) = tune(p, &filter, &grid_params, &tuning_runs, env.progress)?;
         let best = &grid[chosen];
-        let method_fused = fused(
-            best.p_detect,
-            best.p_false_alarm,
-            best.filter_p_detect,
-            p.local,
-        );
+        let method_fused = fused_method(p, &filter, best, p.local);
         let Method::Fused(_, fusion, _) = method_fused else {
             bail!("internal: the tuned method is not fused");
         };
-
-        // Reported runs: run 0 keeps its frames for the figures.
         let methods = [
             Method::Global(filter),
             method_fused,
             Method::Gm(filter, p.gm),
         ];
-        let jobs: Vec<(usize, Method)> = methods
-            .iter()
-            .flat_map(|m| (0..p.n_runs).map(move |i| (i, *m)))
-            .collect();
-        let results: Vec<(Score, Option<Kept>)> = jobs
-            .par_iter()
-            .map(|(i, m)| track(&runs[*i], *m, *i == 0, env.progress))
-            .collect::<Result<_>>()?;
-        let mut scores: [Vec<Score>; 3] = Default::default();
-        let mut kept: Vec<Kept> = Vec::new();
-        for (k, (s, f)) in results.into_iter().enumerate() {
-            scores[k / p.n_runs].push(s);
-            kept.extend(f);
-        }
-        let Ok(first) = <[Kept; 3]>::try_from(kept) else {
-            bail!("internal: expected the first run's frames of three methods");
-        };
-
+        let (scores, first) = report_runs(p, &runs, methods, env.progress)?;
         let sweep = match &p.sweep {
             None => None,
-            Some(s) => {
-                let mut points = Vec::new();
-                let mut jobs = Vec::new();
-                for &drift in &s.p_drift {
-                    for &pd in &s.local_p_detect {
-                        let local = LocalDetectorSim {
-                            p_detect: pd,
-                            p_drift: drift,
-                            ..p.local
-                        };
-                        points.push((pd, drift));
-                        jobs.extend((0..s.n_runs).map(|i| {
-                            (
-                                i,
-                                fused(
-                                    best.p_detect,
-                                    best.p_false_alarm,
-                                    best.filter_p_detect,
-                                    local,
-                                ),
-                            )
-                        }));
-                    }
-                }
-                let out = run_jobs(&runs, &jobs, env.progress)?;
-                Some(SweepOut {
-                    points: points
-                        .into_iter()
-                        .zip(out.chunks(s.n_runs))
-                        .map(|((pd, d), c)| (pd, d, c.to_vec()))
-                        .collect(),
-                    global: scores[0][..s.n_runs].to_vec(),
-                    per_drift: s.local_p_detect.len(),
-                })
-            }
+            Some(s) => Some(run_sweep(
+                p,
+                s,
+                &filter,
+                best,
+                &runs,
+                &scores[0],
+                env.progress,
+            )?),
         };
         env.progress
             .advance(p.sweep.as_ref().map_or(0, |s| s.n_runs as u64));
-
         let detector = runs
             .iter()
             .map(|r| {
@@ -598,8 +674,8 @@ impl Pipeline for PhdPedestrians {
             fusion,
             fused_filter_p_detect: best.filter_p_detect,
             local: p.local,
-            tuning_recall,
-            tuning_false_per_frame,
+            tuning_recall: baseline.recall,
+            tuning_false_per_frame: baseline.false_per_frame,
             grid,
             chosen,
             detector,

@@ -356,106 +356,17 @@ impl Pipeline for PhdImages {
     }
 
     fn present(out: &Output) -> Section {
-        let mut t = Table::new(
-            &format!(
-                "SR and FAF, mean ± 95 % CI over {} runs ({} frames of {} × {} rendered video \
-                 each)",
-                out.scores[0].len(),
-                out.frames,
-                out.size.0,
-                out.size.1
-            ),
-            &[
-                "tracker",
-                "SR (%)",
-                "FAF",
-                "SR gain over global-only (points)",
-            ],
-        );
-        for (k, name) in NAMES.iter().enumerate() {
-            let (sr, sr_ci) = mean_ci(out.scores[k].iter().map(|s| s.sr));
-            let (faf, faf_ci) = mean_ci(out.scores[k].iter().map(|s| s.faf));
-            let g = if k >= 2 {
-                let (g, ci) = gain(out, k);
-                format!("{} ± {}", fmt_num(100.0 * g), fmt_num(100.0 * ci))
-            } else {
-                "-".to_string()
-            };
-            t.row(vec![
-                (*name).to_string(),
-                format!("{} ± {}", fmt_num(100.0 * sr), fmt_num(100.0 * sr_ci)),
-                format!("{} ± {}", fmt_num(faf), fmt_num(faf_ci)),
-                g,
-            ]);
-        }
-        let mut per_run = Table::new(
-            "SR (%) per reported run",
-            &["run", NAMES[0], NAMES[1], NAMES[2], NAMES[3]],
-        );
-        for r in 0..out.scores[0].len() {
-            let mut row = vec![r.to_string()];
-            row.extend((0..4).map(|k| fmt_num(100.0 * out.scores[k][r].sr)));
-            per_run.row(row);
-        }
-        let (recall, fp) = (
-            mean_ci(out.detector.iter().map(|d| d.0)).0,
-            mean_ci(out.detector.iter().map(|d| d.1)).0,
-        );
-        let summary = format!(
-            "The scene is rendered as video (people-like sprites with varied clothing over a \
-             cluttered background, nearer people hiding farther ones) and the local detectors \
-             of the image-fused tracker run on those pixels: HOG blocks, online boosting and an \
-             RGB histogram (image-detector). The global detector is simulated from the truth \
-             (recall {:.0} %, {} false boxes per frame on the reported runs). Baselines use \
-             p_D = {:.2}, the recall measured on separate tuning runs. The report draws boxes \
-             as outlines (the report has no raster images, so the rendered frame itself is not \
-             shown).",
-            100.0 * recall,
-            fmt_num(fp),
-            out.recall
-        );
         let mut figures = Vec::new();
-        if let Some(Overlay {
-            frame: f,
-            truth,
-            global,
-            fused,
-        }) = &out.overlay
-        {
-            let mut series = Vec::new();
-            for (label, boxes, style, colour) in [
-                ("people", truth, Style::Line, 7),
-                ("global-only", global, Style::ThinLine, 0),
-                ("image-fused", fused, Style::Line, 1),
-            ] {
-                for (i, b) in boxes.iter().enumerate() {
-                    series.push(Series::new(
-                        if i == 0 { label } else { "" },
-                        outline(b),
-                        style,
-                        colour,
-                    ));
-                }
-            }
-            figures.push(Figure::new(
-                "overlay",
-                &format!("First reported run, frame {f}: true boxes and each tracker's estimates"),
-                Chart::new(
-                    &format!("Frame {f} ({} × {} pixels)", out.size.0, out.size.1),
-                    "x (px)",
-                    "y (px)",
-                    series,
-                )
-                .in_image_coordinates(),
-            ));
+        if let Some(overlay) = &out.overlay {
+            figures.push(overlay_figure(out, overlay));
         }
         Section {
             title: format!(
                 "SMC-PHD with image-based local detectors (Yoon et al. 2016): {}",
                 out.title
             ),
-            summary,
-            tables: vec![t, per_run],
+            summary: summary(out),
+            tables: vec![sr_table(out), per_run_table(out)],
             figures,
         }
     }
@@ -505,6 +416,117 @@ impl Pipeline for PhdImages {
             },
         ]
     }
+}
+
+/// The SR and FAF table in the measures of Yoon et al. (2016), Table 1: each tracker's mean ±
+/// 95 % CI over the runs, with the paired SR gain of the fused trackers over global-only.
+fn sr_table(out: &Output) -> Table {
+    let mut t = Table::new(
+        &format!(
+            "SR and FAF, mean ± 95 % CI over {} runs ({} frames of {} × {} rendered video \
+             each)",
+            out.scores[0].len(),
+            out.frames,
+            out.size.0,
+            out.size.1
+        ),
+        &[
+            "tracker",
+            "SR (%)",
+            "FAF",
+            "SR gain over global-only (points)",
+        ],
+    );
+    for (k, name) in NAMES.iter().enumerate() {
+        let (sr, sr_ci) = mean_ci(out.scores[k].iter().map(|s| s.sr));
+        let (faf, faf_ci) = mean_ci(out.scores[k].iter().map(|s| s.faf));
+        let g = if k >= 2 {
+            let (g, ci) = gain(out, k);
+            format!("{} ± {}", fmt_num(100.0 * g), fmt_num(100.0 * ci))
+        } else {
+            "-".to_string()
+        };
+        t.row(vec![
+            (*name).to_string(),
+            format!("{} ± {}", fmt_num(100.0 * sr), fmt_num(100.0 * sr_ci)),
+            format!("{} ± {}", fmt_num(faf), fmt_num(faf_ci)),
+            g,
+        ]);
+    }
+    t
+}
+
+/// The per-run table: every tracker's SR on each reported run, behind the paired gains.
+fn per_run_table(out: &Output) -> Table {
+    let mut per_run = Table::new(
+        "SR (%) per reported run",
+        &["run", NAMES[0], NAMES[1], NAMES[2], NAMES[3]],
+    );
+    for r in 0..out.scores[0].len() {
+        let mut row = vec![r.to_string()];
+        row.extend((0..4).map(|k| fmt_num(100.0 * out.scores[k][r].sr)));
+        per_run.row(row);
+    }
+    per_run
+}
+
+/// The report's summary: the rendered scene, the image local detectors, the simulated global
+/// detector's quality and the baselines' p_D (measured on separate tuning runs).
+fn summary(out: &Output) -> String {
+    let (recall, fp) = (
+        mean_ci(out.detector.iter().map(|d| d.0)).0,
+        mean_ci(out.detector.iter().map(|d| d.1)).0,
+    );
+    format!(
+        "The scene is rendered as video (people-like sprites with varied clothing over a \
+         cluttered background, nearer people hiding farther ones) and the local detectors \
+         of the image-fused tracker run on those pixels: HOG blocks, online boosting and an \
+         RGB histogram (image-detector). The global detector is simulated from the truth \
+         (recall {:.0} %, {} false boxes per frame on the reported runs). Baselines use \
+         p_D = {:.2}, the recall measured on separate tuning runs. The report draws boxes \
+         as outlines (the report has no raster images, so the rendered frame itself is not \
+         shown).",
+        100.0 * recall,
+        fmt_num(fp),
+        out.recall
+    )
+}
+
+/// The "overlay" figure: the first reported run's overlay frame with the true boxes and the
+/// global-only and image-fused trackers' estimates, as outlines in image coordinates.
+fn overlay_figure(out: &Output, overlay: &Overlay) -> Figure {
+    let Overlay {
+        frame: f,
+        truth,
+        global,
+        fused,
+    } = overlay;
+    let mut series = Vec::new();
+    for (label, boxes, style, colour) in [
+        ("people", truth, Style::Line, 7),
+        ("global-only", global, Style::ThinLine, 0),
+        ("image-fused", fused, Style::Line, 1),
+    ] {
+        for (i, b) in boxes.iter().enumerate() {
+            series.push(Series::new(
+                if i == 0 { label } else { "" },
+                outline(b),
+                style,
+                colour,
+            ));
+        }
+    }
+    Figure::new(
+        "overlay",
+        &format!("First reported run, frame {f}: true boxes and each tracker's estimates"),
+        Chart::new(
+            &format!("Frame {f} ({} × {} pixels)", out.size.0, out.size.1),
+            "x (px)",
+            "y (px)",
+            series,
+        )
+        .in_image_coordinates(),
+    )
 }
 
 /// Paired SR gain of method `k` over global-only: mean ± 95 % CI over runs.

@@ -742,66 +742,73 @@ fn run_specs(p: &Params) -> Result<Vec<RunSpec>> {
     Ok(runs)
 }
 
+/// Checks the parameters before any run: passes, the tuning seeds apart from the reported
+/// `seed`, the multi-vehicle beamformer, the peak-score tables and every approach's settings.
+fn check_params(p: &Params, seed: u64) -> Result<()> {
+    ensure!(!p.passes.is_empty(), "no passes");
+    ensure!(p.pad_s >= 0.0, "pad_s must be >= 0");
+    ensure!(
+        p.passes.iter().all(|s| s.duration_s > 0.0),
+        "pass durations must be > 0"
+    );
+    // Everything chosen or learnt on seeds is chosen on seeds other than the reported one.
+    for (what, seeds) in [
+        ("[params.tuning]", &p.tuning.seeds),
+        ("[params.multi_tuning]", &p.multi_tuning.seeds),
+        ("[params.score_fit]", &p.score_fit.seeds),
+    ] {
+        ensure!(
+            !seeds.contains(&seed),
+            "{what}: the seeds hold the reported seed {}",
+            seed
+        );
+    }
+    if let Some(multi) = &p.audio.multi_beamform {
+        ensure!(
+            (multi.n_beams, multi.sample_rate_hz)
+                == (p.audio.beamform.n_beams, p.audio.beamform.sample_rate_hz),
+            "[params.audio.multi_beamform] must keep [params.audio.beamform]'s n_beams ({}) \
+             and sample_rate_hz ({})",
+            p.audio.beamform.n_beams,
+            p.audio.beamform.sample_rate_hz
+        );
+        multi.check(&MicArray::default())?;
+    }
+    let keys: Vec<String> = (0..APPROACHES.len()).map(settings_key).collect();
+    for (k, table) in &p.multi_peak_scores {
+        ensure!(
+            keys.contains(k),
+            "[params.multi_peak_scores]: unknown approach {k} (one of {})",
+            keys.join(", ")
+        );
+        table
+            .check()
+            .map_err(|e| anyhow::anyhow!("[params.multi_peak_scores.{k}]: {e}"))?;
+    }
+    for a in 0..APPROACHES.len() {
+        // The tables are learnt on multi-vehicle runs, for those runs only.
+        ensure!(
+            !p.settings.get(a).scored,
+            "[params.settings.{}]: scored is for the multi-vehicle settings only",
+            settings_key(a)
+        );
+        for multi in [false, true] {
+            let s = settings_of(p, a, multi);
+            av_config(p, a, s, peak_scores_of(p, a, s)?)?.check()?;
+            for n in sensor_nodes(p, nominal(p), s)? {
+                n.check()?;
+            }
+        }
+    }
+    Ok(())
+}
+
 impl Pipeline for AvFusion {
     type Params = Params;
     type Output = Output;
 
     fn compute(p: &Params, rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Output> {
-        ensure!(!p.passes.is_empty(), "no passes");
-        ensure!(p.pad_s >= 0.0, "pad_s must be >= 0");
-        ensure!(
-            p.passes.iter().all(|s| s.duration_s > 0.0),
-            "pass durations must be > 0"
-        );
-        // Everything chosen or learnt on seeds is chosen on seeds other than the reported one.
-        for (what, seeds) in [
-            ("[params.tuning]", &p.tuning.seeds),
-            ("[params.multi_tuning]", &p.multi_tuning.seeds),
-            ("[params.score_fit]", &p.score_fit.seeds),
-        ] {
-            ensure!(
-                !seeds.contains(&env.seed),
-                "{what}: the seeds hold the reported seed {}",
-                env.seed
-            );
-        }
-        if let Some(multi) = &p.audio.multi_beamform {
-            ensure!(
-                (multi.n_beams, multi.sample_rate_hz)
-                    == (p.audio.beamform.n_beams, p.audio.beamform.sample_rate_hz),
-                "[params.audio.multi_beamform] must keep [params.audio.beamform]'s n_beams ({}) \
-                 and sample_rate_hz ({})",
-                p.audio.beamform.n_beams,
-                p.audio.beamform.sample_rate_hz
-            );
-            multi.check(&MicArray::default())?;
-        }
-        let keys: Vec<String> = (0..APPROACHES.len()).map(settings_key).collect();
-        for (k, table) in &p.multi_peak_scores {
-            ensure!(
-                keys.contains(k),
-                "[params.multi_peak_scores]: unknown approach {k} (one of {})",
-                keys.join(", ")
-            );
-            table
-                .check()
-                .map_err(|e| anyhow::anyhow!("[params.multi_peak_scores.{k}]: {e}"))?;
-        }
-        for a in 0..APPROACHES.len() {
-            // The tables are learnt on multi-vehicle runs, for those runs only.
-            ensure!(
-                !p.settings.get(a).scored,
-                "[params.settings.{}]: scored is for the multi-vehicle settings only",
-                settings_key(a)
-            );
-            for multi in [false, true] {
-                let s = settings_of(p, a, multi);
-                av_config(p, a, s, peak_scores_of(p, a, s)?)?.check()?;
-                for n in sensor_nodes(p, nominal(p), s)? {
-                    n.check()?;
-                }
-            }
-        }
+        check_params(p, env.seed)?;
         let runs = run_specs(p)?;
         run_developer_tools(env.developer, p, &runs)?;
         env.progress.set_length(runs.len() as u64);

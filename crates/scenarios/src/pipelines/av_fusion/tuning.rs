@@ -232,8 +232,8 @@ pub(super) fn tune(dev: &dyn Developer, p: &Params, runs: &[RunSpec]) -> Result<
             .collect::<Result<_>>()?;
         sims.extend(batch);
     }
-    let mut out = format!("av-fusion tuning on seeds {:?}\n", t.seeds);
     let singles: Vec<&Simulated> = sims.iter().filter(|(m, _)| !m).map(|(_, s)| s).collect();
+    let mut bearing_lines = Vec::new();
     for calib in [
         Calibration {
             audio_deg: 0.0,
@@ -246,187 +246,227 @@ pub(super) fn tune(dev: &dyn Developer, p: &Params, runs: &[RunSpec]) -> Result<
             .iter()
             .map(|(m, s)| format!("{m:+.1}° ± {s:.1}°"))
             .collect();
-        let text = format!(
+        bearing_lines.push(format!(
             "bearing error of the profile maximum at {calib:?}: {}",
             text.join(", ")
-        );
-        dev.say(&text);
-        out.push_str(&text);
-        out.push('\n');
+        ));
     }
-    // Each line goes to stderr as it is measured (the search takes minutes) and into the table.
-    let line = |out: &mut String, what: String, s: &TuneScore| {
-        let text = format!(
-            "{what}: error {:.3} m, MOTA {:.3} (multi-vehicle {:.3}, peak recall {:.2}, false peaks/tick {:.2})",
-            s.error_m, s.mota, s.multi_mota, s.peak_recall, s.false_peaks
-        );
-        dev.say(&text);
-        out.push_str(&text);
-        out.push('\n');
+    let mut search = Search {
+        dev,
+        out: format!("av-fusion tuning on seeds {:?}\n", t.seeds),
+        sims,
+        q: p.clone(),
     };
-    let mut q = p.clone();
-    for (a, (name, modalities, product)) in APPROACHES.iter().enumerate() {
-        let s = tune_score(&q, &sims, a)?;
-        line(&mut out, format!("{name}: as configured"), &s);
+    for line in bearing_lines {
+        search.say(&line);
+    }
+    for (a, (name, _, _)) in APPROACHES.iter().enumerate() {
+        let s = tune_score(&search.q, &search.sims, a)?;
+        search.line(&format!("{name}: as configured"), &s);
         // The stages are repeated until a round changes nothing (a fixed point) or for
         // `max_rounds`.
         for round in 1..=t.max_rounds.max(1) {
-            let before = *q.settings.get(a);
-            let text = format!("{name}: round {round}");
-            dev.say(&text);
-            out.push_str(&text);
-            out.push('\n');
-            // Stage 1: the grid of the parameters this approach uses (a single value elsewhere).
-            let uses_audio = *modalities != Modalities::Video;
-            let uses_video = *modalities != Modalities::Audio;
-            let configured = *q.settings.get(a);
-            let video_weights: Vec<f64> = if *modalities == Modalities::Both {
-                t.video_weight.clone()
-            } else {
-                vec![configured.video_weight]
-            };
-            let audio_exponents = if uses_audio {
-                t.audio_exponent.clone()
-            } else {
-                vec![configured.audio_exponent]
-            };
-            let video_exponents = if uses_video {
-                t.video_exponent.clone()
-            } else {
-                vec![configured.video_exponent]
-            };
-            let floors: Vec<Option<f64>> = if *product {
-                t.product_floor.iter().copied().map(Some).collect()
-            } else {
-                vec![None]
-            };
-            let mut candidates: Vec<(ApproachSettings, TuneScore)> = Vec::new();
-            for &video_weight in &video_weights {
-                for &audio_exponent in &audio_exponents {
-                    for &video_exponent in &video_exponents {
-                        for &product_floor in &floors {
-                            let w = ApproachSettings {
-                                audio_weight: 1.0,
-                                video_weight,
-                                audio_exponent,
-                                video_exponent,
-                                product_floor,
-                                ..configured
-                            };
-                            let mut c = q.clone();
-                            *c.settings.get_mut(a) = w;
-                            let s = tune_score(&c, &sims, a)?;
-                            line(
-                                &mut out,
-                                format!(
-                                    "stage 1 {name}: w_v {video_weight}, gamma_a {audio_exponent}, gamma_v {video_exponent}, floor {product_floor:?}"
-                                ),
-                                &s,
-                            );
-                            candidates.push((w, s));
-                        }
-                    }
-                }
-            }
-            let Some((w, s)) = stage1_choice(&candidates, t.error_tolerance) else {
-                anyhow::bail!("an empty stage-1 grid");
-            };
-            *q.settings.get_mut(a) = w;
-            line(&mut out, format!("stage 1 choice {name}: {w:?}"), &s);
-            // Stage 2a: NMS radius, p_d and clutter rate by the approach's mean MOTA.
-            let mut best: Option<(ApproachSettings, TuneScore)> = None;
-            for &nms in &t.suppression_radius_m {
-                for &pd in &t.p_detect {
-                    for &clutter in &t.clutter_per_scan {
-                        let w = ApproachSettings {
-                            suppression_radius_m: nms,
-                            p_detect: pd,
-                            clutter_per_scan: clutter,
-                            ..*q.settings.get(a)
-                        };
-                        let mut c = q.clone();
-                        *c.settings.get_mut(a) = w;
-                        let s = tune_score(&c, &sims, a)?;
-                        line(
-                            &mut out,
-                            format!("stage 2a {name}: nms {nms} m, p_d {pd}, clutter {clutter}"),
-                            &s,
-                        );
-                        if best.as_ref().is_none_or(|b| s.mota > b.1.mota) {
-                            best = Some((w, s));
-                        }
-                    }
-                }
-            }
-            let Some((w, s)) = best else {
-                anyhow::bail!("an empty stage-2a grid");
-            };
-            *q.settings.get_mut(a) = w;
-            line(&mut out, format!("stage 2a choice {name}: {w:?}"), &s);
-            // Stage 2b: the peaks' κ by the same MOTA.
-            let kappas = if *product {
-                &t.relative_threshold_product
-            } else {
-                &t.relative_threshold_sum
-            };
-            let mut best: Option<(ApproachSettings, TuneScore)> = None;
-            for &kappa in kappas {
-                let w = ApproachSettings {
-                    relative_threshold: kappa,
-                    ..*q.settings.get(a)
-                };
-                let mut c = q.clone();
-                *c.settings.get_mut(a) = w;
-                let s = tune_score(&c, &sims, a)?;
-                line(&mut out, format!("stage 2b {name}: kappa {kappa}"), &s);
-                if best.as_ref().is_none_or(|b| s.mota > b.1.mota) {
-                    best = Some((w, s));
-                }
-            }
-            let Some((w, s)) = best else {
-                anyhow::bail!("an empty stage-2b grid");
-            };
-            *q.settings.get_mut(a) = w;
-            line(&mut out, format!("round {round} choice {name}: {w:?}"), &s);
-            if w == before {
+            let before = *search.q.settings.get(a);
+            search.say(&format!("{name}: round {round}"));
+            search.stage1(a)?;
+            search.stage2a(a)?;
+            let w = search.stage2b(a)?;
+            search.line(&format!("round {round} choice {name}: {w:?}"), &w.1);
+            if w.0 == before {
                 break;
             }
         }
     }
     // The choice as TOML, to paste into the scenario file.
-    for (a, (name, modalities, _)) in APPROACHES.iter().enumerate() {
-        let w = q.settings.get(a);
-        let mut fields = Vec::new();
-        if *modalities == Modalities::Both {
-            fields.push(format!("audio_weight = {:?}", w.audio_weight));
-            fields.push(format!("video_weight = {:?}", w.video_weight));
-        }
-        if *modalities != Modalities::Video {
-            fields.push(format!("audio_exponent = {:?}", w.audio_exponent));
-        }
-        if *modalities != Modalities::Audio {
-            fields.push(format!("video_exponent = {:?}", w.video_exponent));
-        }
-        if let Some(f) = w.product_floor {
-            fields.push(format!("product_floor = {f:?}"));
-        }
-        fields.push(format!("relative_threshold = {:?}", w.relative_threshold));
-        fields.push(format!(
-            "suppression_radius_m = {:?}",
-            w.suppression_radius_m
-        ));
-        fields.push(format!("p_detect = {:?}", w.p_detect));
-        fields.push(format!("clutter_per_scan = {:?}", w.clutter_per_scan));
-        let text = format!(
-            "{} = {{ {} }}",
-            key(name).replace("audiovideo", "audio_video"),
-            fields.join(", ")
-        );
-        dev.say(&text);
-        out.push_str(&text);
-        out.push('\n');
+    for a in 0..APPROACHES.len() {
+        search.say(&settings_toml(a, search.q.settings.get(a)));
     }
-    Ok(out)
+    Ok(search.out)
+}
+
+/// The single-vehicle search's state: the simulated tuning runs, the parameters as chosen so
+/// far, and the table of every candidate's score, which also goes line by line to the
+/// developer as it is measured (the search takes minutes).
+struct Search<'a> {
+    dev: &'a dyn Developer,
+    out: String,
+    sims: Vec<(bool, Simulated)>,
+    q: Params,
+}
+
+impl Search<'_> {
+    fn say(&mut self, text: &str) {
+        self.dev.say(text);
+        self.out.push_str(text);
+        self.out.push('\n');
+    }
+
+    fn line(&mut self, what: &str, s: &TuneScore) {
+        self.say(&format!(
+            "{what}: error {:.3} m, MOTA {:.3} (multi-vehicle {:.3}, peak recall {:.2}, false peaks/tick {:.2})",
+            s.error_m, s.mota, s.multi_mota, s.peak_recall, s.false_peaks
+        ));
+    }
+
+    /// The score of approach `a` with settings `w`.
+    fn score(&self, a: usize, w: ApproachSettings) -> Result<TuneScore> {
+        let mut c = self.q.clone();
+        *c.settings.get_mut(a) = w;
+        tune_score(&c, &self.sims, a)
+    }
+
+    /// Stage 1: the grid of the fusion parameters this approach uses (a single value
+    /// elsewhere), chosen by [`stage1_choice`].
+    fn stage1(&mut self, a: usize) -> Result<()> {
+        let t = &self.q.tuning.clone();
+        let (name, modalities, product) = APPROACHES[a];
+        let uses_audio = modalities != Modalities::Video;
+        let uses_video = modalities != Modalities::Audio;
+        let configured = *self.q.settings.get(a);
+        let video_weights: Vec<f64> = if modalities == Modalities::Both {
+            t.video_weight.clone()
+        } else {
+            vec![configured.video_weight]
+        };
+        let audio_exponents = if uses_audio {
+            t.audio_exponent.clone()
+        } else {
+            vec![configured.audio_exponent]
+        };
+        let video_exponents = if uses_video {
+            t.video_exponent.clone()
+        } else {
+            vec![configured.video_exponent]
+        };
+        let floors: Vec<Option<f64>> = if product {
+            t.product_floor.iter().copied().map(Some).collect()
+        } else {
+            vec![None]
+        };
+        let mut candidates: Vec<(ApproachSettings, TuneScore)> = Vec::new();
+        for &video_weight in &video_weights {
+            for &audio_exponent in &audio_exponents {
+                for &video_exponent in &video_exponents {
+                    for &product_floor in &floors {
+                        let w = ApproachSettings {
+                            audio_weight: 1.0,
+                            video_weight,
+                            audio_exponent,
+                            video_exponent,
+                            product_floor,
+                            ..configured
+                        };
+                        let s = self.score(a, w)?;
+                        self.line(
+&format!(
+                                "stage 1 {name}: w_v {video_weight}, gamma_a {audio_exponent}, gamma_v {video_exponent}, floor {product_floor:?}"
+                            ),
+                            &s,
+                        );
+                        candidates.push((w, s));
+                    }
+                }
+            }
+        }
+        let Some((w, s)) = stage1_choice(&candidates, t.error_tolerance) else {
+            anyhow::bail!("an empty stage-1 grid");
+        };
+        *self.q.settings.get_mut(a) = w;
+        self.line(&format!("stage 1 choice {name}: {w:?}"), &s);
+        Ok(())
+    }
+
+    /// Stage 2a: the NMS radius, p_d and clutter rate by the approach's mean MOTA.
+    fn stage2a(&mut self, a: usize) -> Result<()> {
+        let t = &self.q.tuning.clone();
+        let name = APPROACHES[a].0;
+        let mut best: Option<(ApproachSettings, TuneScore)> = None;
+        for &nms in &t.suppression_radius_m {
+            for &pd in &t.p_detect {
+                for &clutter in &t.clutter_per_scan {
+                    let w = ApproachSettings {
+                        suppression_radius_m: nms,
+                        p_detect: pd,
+                        clutter_per_scan: clutter,
+                        ..*self.q.settings.get(a)
+                    };
+                    let s = self.score(a, w)?;
+                    self.line(
+                        &format!("stage 2a {name}: nms {nms} m, p_d {pd}, clutter {clutter}"),
+                        &s,
+                    );
+                    if best.as_ref().is_none_or(|b| s.mota > b.1.mota) {
+                        best = Some((w, s));
+                    }
+                }
+            }
+        }
+        let Some((w, s)) = best else {
+            anyhow::bail!("an empty stage-2a grid");
+        };
+        *self.q.settings.get_mut(a) = w;
+        self.line(&format!("stage 2a choice {name}: {w:?}"), &s);
+        Ok(())
+    }
+
+    /// Stage 2b: the peaks' κ by the same MOTA; returns the round's choice.
+    fn stage2b(&mut self, a: usize) -> Result<(ApproachSettings, TuneScore)> {
+        let (name, _, product) = APPROACHES[a];
+        let kappas = if product {
+            self.q.tuning.relative_threshold_product.clone()
+        } else {
+            self.q.tuning.relative_threshold_sum.clone()
+        };
+        let mut best: Option<(ApproachSettings, TuneScore)> = None;
+        for &kappa in &kappas {
+            let w = ApproachSettings {
+                relative_threshold: kappa,
+                ..*self.q.settings.get(a)
+            };
+            let s = self.score(a, w)?;
+            self.line(&format!("stage 2b {name}: kappa {kappa}"), &s);
+            if best.as_ref().is_none_or(|b| s.mota > b.1.mota) {
+                best = Some((w, s));
+            }
+        }
+        let Some(best) = best else {
+            anyhow::bail!("an empty stage-2b grid");
+        };
+        *self.q.settings.get_mut(a) = best.0;
+        Ok(best)
+    }
+}
+
+/// Approach `a`'s settings `w` as a line of TOML for the scenario file (only the keys the
+/// approach uses).
+fn settings_toml(a: usize, w: &ApproachSettings) -> String {
+    let (name, modalities, _) = APPROACHES[a];
+    let mut fields = Vec::new();
+    if modalities == Modalities::Both {
+        fields.push(format!("audio_weight = {:?}", w.audio_weight));
+        fields.push(format!("video_weight = {:?}", w.video_weight));
+    }
+    if modalities != Modalities::Video {
+        fields.push(format!("audio_exponent = {:?}", w.audio_exponent));
+    }
+    if modalities != Modalities::Audio {
+        fields.push(format!("video_exponent = {:?}", w.video_exponent));
+    }
+    if let Some(f) = w.product_floor {
+        fields.push(format!("product_floor = {f:?}"));
+    }
+    fields.push(format!("relative_threshold = {:?}", w.relative_threshold));
+    fields.push(format!(
+        "suppression_radius_m = {:?}",
+        w.suppression_radius_m
+    ));
+    fields.push(format!("p_detect = {:?}", w.p_detect));
+    fields.push(format!("clutter_per_scan = {:?}", w.clutter_per_scan));
+    format!(
+        "{} = {{ {} }}",
+        key(name).replace("audiovideo", "audio_video"),
+        fields.join(", ")
+    )
 }
 
 /// Setting this environment variable (`all`, or approach indices) learns the peak-score tables
@@ -682,87 +722,8 @@ pub(super) fn tune_multi(
     };
     let mut chosen = Vec::new();
     for a in order {
-        let (name, modalities, product) = &APPROACHES[a];
-        let mut coords: Vec<Coordinate> = Vec::new();
-        if *modalities != Modalities::Video {
-            coords.push(("audio lobe power", t.lobe_power.clone(), |s, v| {
-                s.audio_lobes = lobes_with(s.audio_lobes, Some(v), None);
-            }));
-            coords.push(("audio lobe fraction", t.lobe_fraction.clone(), |s, v| {
-                s.audio_lobes = lobes_with(s.audio_lobes, None, Some(v));
-            }));
-            coords.push(("audio exponent", t.audio_exponent.clone(), |s, v| {
-                s.audio_exponent = v
-            }));
-        }
-        if *modalities != Modalities::Audio {
-            coords.push(("video lobe power", t.lobe_power.clone(), |s, v| {
-                s.video_lobes = lobes_with(s.video_lobes, Some(v), None);
-            }));
-            coords.push(("video lobe fraction", t.lobe_fraction.clone(), |s, v| {
-                s.video_lobes = lobes_with(s.video_lobes, None, Some(v));
-            }));
-            coords.push(("video exponent", t.video_exponent.clone(), |s, v| {
-                s.video_exponent = v
-            }));
-        }
-        if *modalities == Modalities::Both {
-            coords.push(("video weight", t.video_weight.clone(), |s, v| {
-                s.video_weight = v
-            }));
-        }
-        coords.push((
-            "kappa",
-            if *product {
-                t.relative_threshold_product.clone()
-            } else {
-                t.relative_threshold_sum.clone()
-            },
-            |s, v| s.relative_threshold = v,
-        ));
-        coords.push(("nms", t.suppression_radius_m.clone(), |s, v| {
-            s.suppression_radius_m = v
-        }));
-        coords.push(("p_d", t.p_detect.clone(), |s, v| s.p_detect = v));
-        coords.push(("clutter", t.clutter_per_scan.clone(), |s, v| {
-            s.clutter_per_scan = v
-        }));
-        if *product {
-            coords.push(("floor", t.product_floor.clone(), |s, v| {
-                s.product_floor = Some(v);
-            }));
-        }
-        coords.push((
-            "max peaks",
-            t.max_peaks.iter().map(|&n| n as f64).collect(),
-            |s, v| s.max_peaks = Some(v as usize),
-        ));
-        coords.push(("births", t.births_per_scan.clone(), |s, v| {
-            s.births_per_scan = Some(v)
-        }));
-        if p.multi_peak_scores.contains_key(&settings_key(a)) {
-            coords.push(("scored", vec![0.0, 1.0], |s, v| s.scored = v > 0.5));
-        }
-        coords.push(("max speed", t.max_speed.clone(), |s, v| {
-            s.max_speed = Some(v)
-        }));
-        coords.push((
-            "max gap",
-            t.max_gap.iter().map(|&d| f64::from(d)).collect(),
-            |s, v| s.max_gap = Some(v as u32),
-        ));
-        coords.push(("fade r0", t.fade_full_weight_m.clone(), |s, v| {
-            s.range_fade = fade_with(s.range_fade, Some(v), None);
-        }));
-        coords.push(("fade power", t.fade_power.clone(), |s, v| {
-            s.range_fade = fade_with(s.range_fade, None, Some(v));
-        }));
-        coords.insert(
-            0,
-            ("explain away", t.explain_away_deg.clone(), |s, v| {
-                s.explain_away_deg = v
-            }),
-        );
+        let name = APPROACHES[a].0;
+        let coords = multi_coordinates(p, a);
         // Scores change what every rate and threshold should be, so turning them on alone
         // from settings tuned without them rarely pays: an approach with a score table is
         // searched from both starts (unscored and scored), and the better end point is kept.
@@ -792,6 +753,100 @@ pub(super) fn tune_multi(
         dev.say(&format!("{k} (MOTA {m:.3}) = {s:?}"));
     }
     Ok(())
+}
+
+/// The coordinates of the multi-vehicle search of approach `a`, in search order: the
+/// explaining-away width, the profile shaping of the modalities it uses, then the peaks'
+/// threshold and suppression, MCMCDA's rates and limits, and the range fade.
+fn multi_coordinates(p: &Params, a: usize) -> Vec<Coordinate> {
+    let t = &p.multi_tuning;
+    let mut coords: Vec<Coordinate> = vec![("explain away", t.explain_away_deg.clone(), |s, v| {
+        s.explain_away_deg = v
+    })];
+    coords.extend(profile_coordinates(t, APPROACHES[a].1));
+    let product = APPROACHES[a].2;
+    let product = &product;
+    coords.push((
+        "kappa",
+        if *product {
+            t.relative_threshold_product.clone()
+        } else {
+            t.relative_threshold_sum.clone()
+        },
+        |s, v| s.relative_threshold = v,
+    ));
+    coords.push(("nms", t.suppression_radius_m.clone(), |s, v| {
+        s.suppression_radius_m = v
+    }));
+    coords.push(("p_d", t.p_detect.clone(), |s, v| s.p_detect = v));
+    coords.push(("clutter", t.clutter_per_scan.clone(), |s, v| {
+        s.clutter_per_scan = v
+    }));
+    if *product {
+        coords.push(("floor", t.product_floor.clone(), |s, v| {
+            s.product_floor = Some(v);
+        }));
+    }
+    coords.push((
+        "max peaks",
+        t.max_peaks.iter().map(|&n| n as f64).collect(),
+        |s, v| s.max_peaks = Some(v as usize),
+    ));
+    coords.push(("births", t.births_per_scan.clone(), |s, v| {
+        s.births_per_scan = Some(v)
+    }));
+    if p.multi_peak_scores.contains_key(&settings_key(a)) {
+        coords.push(("scored", vec![0.0, 1.0], |s, v| s.scored = v > 0.5));
+    }
+    coords.push(("max speed", t.max_speed.clone(), |s, v| {
+        s.max_speed = Some(v)
+    }));
+    coords.push((
+        "max gap",
+        t.max_gap.iter().map(|&d| f64::from(d)).collect(),
+        |s, v| s.max_gap = Some(v as u32),
+    ));
+    coords.push(("fade r0", t.fade_full_weight_m.clone(), |s, v| {
+        s.range_fade = fade_with(s.range_fade, Some(v), None);
+    }));
+    coords.push(("fade power", t.fade_power.clone(), |s, v| {
+        s.range_fade = fade_with(s.range_fade, None, Some(v));
+    }));
+    coords
+}
+
+/// The lobe equalisation, exponents and (for both modalities) the video weight.
+fn profile_coordinates(t: &MultiTuning, modalities: Modalities) -> Vec<Coordinate> {
+    let modalities = &modalities;
+    let mut coords: Vec<Coordinate> = Vec::new();
+    if *modalities != Modalities::Video {
+        coords.push(("audio lobe power", t.lobe_power.clone(), |s, v| {
+            s.audio_lobes = lobes_with(s.audio_lobes, Some(v), None);
+        }));
+        coords.push(("audio lobe fraction", t.lobe_fraction.clone(), |s, v| {
+            s.audio_lobes = lobes_with(s.audio_lobes, None, Some(v));
+        }));
+        coords.push(("audio exponent", t.audio_exponent.clone(), |s, v| {
+            s.audio_exponent = v
+        }));
+    }
+    if *modalities != Modalities::Audio {
+        coords.push(("video lobe power", t.lobe_power.clone(), |s, v| {
+            s.video_lobes = lobes_with(s.video_lobes, Some(v), None);
+        }));
+        coords.push(("video lobe fraction", t.lobe_fraction.clone(), |s, v| {
+            s.video_lobes = lobes_with(s.video_lobes, None, Some(v));
+        }));
+        coords.push(("video exponent", t.video_exponent.clone(), |s, v| {
+            s.video_exponent = v
+        }));
+    }
+    if *modalities == Modalities::Both {
+        coords.push(("video weight", t.video_weight.clone(), |s, v| {
+            s.video_weight = v
+        }));
+    }
+    coords
 }
 
 /// `AV_FUSION_DIAG=1,2,3`: where the multi-vehicle runs' MOTA errors come from.
