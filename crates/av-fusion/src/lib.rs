@@ -25,8 +25,31 @@
 //!   [`mcmcda::OnlineTracker`] into a [`tracker_model::TrackSet`] whose frames are the ticks,
 //!   optionally with each peak's contrast as a detection score ([`PeakScores`]).
 //!
-//! Three full-circle nodes around a target that moves along x at 10 m/s, fused at 10 Hz by the
-//! floored product and tracked:
+//! One tick of the fusion node on your nodes' reports: three microphone arrays with 8 beams each
+//! (beam i points i × 45° from +x) report their beam energies at 0 s, and the floored product
+//! of their projections peaks where their loudest beams cross:
+//!
+//! ```
+//! use av_fusion::*;
+//! use tracker_model::{Region2, SensorPose, Vec2};
+//!
+//! let at = |x, y| SensorPose { position: Vec2::new(x, y), heading_rad: 0.0 };
+//! let sensors = [at(0.0, 0.0), at(20.0, 0.0), at(10.0, 20.0)].map(|p| SensorNode::audio("mic", p, 8));
+//! let mut node = FusionNode::new(sensors.to_vec(), SchedulerConfig::default())?;
+//! let report = |sensor, v: [f64; 8]| Report { sensor, local_time_s: 0.0, values: v.into() };
+//! node.receive(report(0, [0.2, 1.0, 0.2, 0.0, 0.0, 0.0, 0.0, 0.0]))?; // loudest towards 45°
+//! node.receive(report(1, [0.0, 0.0, 0.2, 1.0, 0.2, 0.0, 0.0, 0.0]))?; // towards 135°
+//! node.receive(report(2, [0.0, 0.0, 0.0, 0.0, 0.0, 0.2, 1.0, 0.2]))?; // towards 270°
+//! let fusion = FusionConfig { region: Region2::square(20.0)?, cell_size_m: 0.5, max_range_m: None,
+//!     min_range_m: 0.5, range_fade: None, rule: FusionRule::Product { floor: 0.05 },
+//!     modalities: Modalities::Both, peaks: PeakExtraction::default() };
+//! let fused = fuse_snapshot(&sensors, &node.snapshot(0), &fusion)?;
+//! assert!((fused.peaks[0].position - Vec2::new(10.0, 10.0)).norm() < 0.5); // within a cell
+//! # Ok::<(), av_fusion::Error>(())
+//! ```
+//!
+//! The whole chain, [`track_reports`]: three full-circle nodes around a target that moves along
+//! x at 10 m/s, fused at 10 Hz by the floored product and tracked:
 //!
 //! ```
 //! use av_fusion::{
