@@ -464,63 +464,12 @@ fn fuse_values<'a>(
     let mut logs = Vec::new();
     for (v, w, fade) in grids {
         ensure_non_negative(w, "fusion weight")?;
-        match rule {
-            FusionRule::WeightedSum { scaling } => {
-                let total: f64 = match scaling {
-                    SumScaling::Sum => v.iter().sum(),
-                    SumScaling::Max => v.iter().copied().fold(0.0, f64::max),
-                };
-                if total > 0.0 && w > 0.0 {
-                    any = true;
-                    let k = w / total;
-                    match fade {
-                        None => acc.iter_mut().zip(v).for_each(|(a, x)| *a += k * x),
-                        Some(f) => {
-                            let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
-                            acc.iter_mut()
-                                .zip(v)
-                                .zip(f)
-                                .for_each(|((a, x), g)| *a += k * (mean + g * (x - mean)));
-                        }
-                    }
-                }
-            }
+        any |= match rule {
+            FusionRule::WeightedSum { scaling } => add_weighted(&mut acc, v, w, fade, scaling),
             FusionRule::Product { floor } => {
-                let max = v.iter().copied().fold(0.0, f64::max);
-                if max > 0.0 && w > 0.0 {
-                    any = true;
-                    let scale = (1.0 - floor) / max;
-                    match fade {
-                        None => acc
-                            .iter_mut()
-                            .zip(v)
-                            .for_each(|(a, x)| *a += w * (floor + scale * x).ln()),
-                        Some(f) => {
-                            // The logarithms once, into a buffer shared by the sensors.
-                            logs.clear();
-                            logs.extend(v.iter().map(|x| (floor + scale * x).ln()));
-                            // Over the finite logarithms: under ε = 0 a zero value is −∞,
-                            // which must still veto its cell, not make the mean −∞ (and
-                            // every cell NaN).
-                            let (sum, count) = logs
-                                .iter()
-                                .filter(|l| l.is_finite())
-                                .fold((0.0, 0usize), |(s, n), l| (s + l, n + 1));
-                            let mean = sum / count.max(1) as f64;
-                            acc.iter_mut().zip(&logs).zip(f).for_each(|((a, l), g)| {
-                                // A veto stays a veto even where g underflows to 0
-                                // (0 · −∞ would be NaN).
-                                *a += if *l == f64::NEG_INFINITY {
-                                    *l
-                                } else {
-                                    g * w * (l - mean)
-                                }
-                            });
-                        }
-                    }
-                }
+                add_log_product(&mut acc, &mut logs, (v, w, fade), floor)
             }
-        }
+        };
     }
     if !any {
         return Ok(None);
@@ -536,6 +485,88 @@ fn fuse_values<'a>(
     let total: f64 = acc.iter().sum();
     acc.iter_mut().for_each(|a| *a /= total);
     Ok(Some(acc))
+}
+
+/// Adds one sensor's term of the weighted-sum rule (linear opinion pool) to `acc`:
+/// w · v / total(v), `total` by `scaling`, each cell pulled towards the slice's mean by its
+/// `fade` gain when given. Returns whether the sensor carried evidence (positive total and
+/// weight); otherwise `acc` is unchanged.
+fn add_weighted(
+    acc: &mut [f64],
+    v: &[f64],
+    w: f64,
+    fade: Option<&[f64]>,
+    scaling: SumScaling,
+) -> bool {
+    let total: f64 = match scaling {
+        SumScaling::Sum => v.iter().sum(),
+        SumScaling::Max => v.iter().copied().fold(0.0, f64::max),
+    };
+    if !(total > 0.0 && w > 0.0) {
+        return false;
+    }
+    let k = w / total;
+    match fade {
+        None => acc.iter_mut().zip(v).for_each(|(a, x)| *a += k * x),
+        Some(f) => {
+            let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+            acc.iter_mut()
+                .zip(v)
+                .zip(f)
+                .for_each(|((a, x), g)| *a += k * (mean + g * (x - mean)));
+        }
+    }
+    true
+}
+
+/// Adds one sensor's term of the floored product rule (logarithmic opinion pool) to `acc`
+/// in logarithms: w · ln(ε + (1 − ε) v / max v), or with `fade` gains g, g · w · (l − mean l)
+/// over the finite logarithms l (a −∞ veto stays a veto). `logs` is scratch shared by the
+/// sensors. Returns whether the sensor carried evidence (positive maximum and weight);
+/// otherwise `acc` is unchanged.
+fn add_log_product(
+    acc: &mut [f64],
+    logs: &mut Vec<f64>,
+    (v, w, fade): (&[f64], f64, Option<&[f64]>),
+    floor: f64,
+) -> bool {
+    let max = v.iter().copied().fold(0.0, f64::max);
+    if !(max > 0.0 && w > 0.0) {
+        return false;
+    }
+    let scale = (1.0 - floor) / max;
+    match fade {
+        None => acc
+            .iter_mut()
+            .zip(v)
+            .for_each(|(a, x)| *a += w * (floor + scale * x).ln()),
+        Some(f) => {
+            // The logarithms once, into a buffer shared by the sensors.
+            logs.clear();
+            logs.extend(v.iter().map(|x| (floor + scale * x).ln()));
+            // Over the finite logarithms: under ε = 0 a zero value is −∞,
+            // which must still veto its cell, not make the mean −∞ (and
+            // every cell NaN).
+            let (sum, count) = logs
+                .iter()
+                .filter(|l| l.is_finite())
+                .fold((0.0, 0usize), |(s, n), l| (s + l, n + 1));
+            let mean = sum / count.max(1) as f64;
+            acc.iter_mut()
+                .zip(logs.iter())
+                .zip(f)
+                .for_each(|((a, l), g)| {
+                    // A veto stays a veto even where g underflows to 0
+                    // (0 · −∞ would be NaN).
+                    *a += if *l == f64::NEG_INFINITY {
+                        *l
+                    } else {
+                        g * w * (l - mean)
+                    }
+                });
+        }
+    }
+    true
 }
 
 /// Fuses unnormalised grids (all over `region` with cells of `cell_size_m`) with their

@@ -287,10 +287,29 @@ pub fn match_tracks<R: Rng + ?Sized>(
     if cands.len() < 2 {
         return Ok(None);
     }
-    // 2. Seeds: pairs among the longest candidates, each fitted by least squares on all its
-    // (subsampled) points and refitted on the inliers. Minimal samples of two tracks are
-    // close to degenerate (each walker's points lie near a vertical ruled surface); a fit on
-    // all points is not, and the tracks of a true pair carry few outliers.
+    let seeds = seed_pairs(cands, threshold, config);
+    if seeds.is_empty() {
+        return Ok(None);
+    }
+    let Some((_, members, e)) = best_growth(cands, &seeds, threshold, config) else {
+        return Ok(None);
+    };
+    finish(&all, members, &e, pixel_scale, threshold, config, rng)
+}
+
+/// Step 2 of [`match_tracks`], the seeds: pairs among the `seed_pool` longest candidates (no
+/// camera's track twice), each fitted by least squares on all its (subsampled) points and
+/// refitted on the inliers, screened by the share of points the linear fit holds, polished by
+/// LM and accepted when both tracks keep `accept_fraction` of their points within the
+/// threshold of the Sampson distance (Hartley & Zisserman 2004). Sorted by inliers, most
+/// first (ties: the lower pair). Minimal samples of two tracks are close to degenerate (each
+/// walker's points lie near a vertical ruled surface); a fit on all points is not, and the
+/// tracks of a true pair carry few outliers.
+fn seed_pairs(
+    cands: &[Candidate],
+    threshold: f64,
+    config: &CorrespondenceConfig,
+) -> Vec<(usize, [usize; 2])> {
     let pool = config.seed_pool.min(cands.len());
     let mut seeds: Vec<(usize, [usize; 2])> = Vec::new();
     for p in 0..pool {
@@ -324,12 +343,20 @@ pub fn match_tracks<R: Rng + ?Sized>(
             seeds.push((n_in, [p, q]));
         }
     }
-    if seeds.is_empty() {
-        return Ok(None);
-    }
     seeds.sort_by(|p, q| q.0.cmp(&p.0).then(p.1.cmp(&q.1)));
-    // 3. Growth from each of the best seeds; the grown hypothesis with the most inliers wins
-    // (a seed of two tracks can fit a wrong E that nothing else joins).
+    seeds
+}
+
+/// Step 3 of [`match_tracks`]: growth from each of the `seed_trials` best seeds; the grown
+/// hypothesis with the most inliers over its members wins (ties: the earlier seed), as a
+/// seed of two tracks can fit a wrong E that nothing else joins. (score, members, E), or
+/// `None` when no seed grows.
+fn best_growth(
+    cands: &[Candidate],
+    seeds: &[(usize, [usize; 2])],
+    threshold: f64,
+    config: &CorrespondenceConfig,
+) -> Option<(usize, Vec<usize>, Matrix3<f64>)> {
     let mut best: Option<(usize, Vec<usize>, Matrix3<f64>)> = None;
     for &(_, seed) in seeds.iter().take(config.seed_trials) {
         let Ok((members, e)) = grow(cands, seed, threshold, config) else {
@@ -350,10 +377,7 @@ pub fn match_tracks<R: Rng + ?Sized>(
             best = Some((score, members, e));
         }
     }
-    let Some((_, members, e)) = best else {
-        return Ok(None);
-    };
-    finish(&all, members, &e, pixel_scale, threshold, config, rng)
+    best
 }
 
 /// Guided track correspondence: the relative pose of the two cameras is already known

@@ -505,7 +505,7 @@ pub fn ransac_essential_from<R: Rng + ?Sized>(
     config.check()?;
     check_input(x1, x2)?;
     let n = x1.len();
-    let mut best: Option<(Matrix3<f64>, usize, f64, Vec<bool>)> = None;
+    let mut best: Option<Hypothesis> = None;
     let mut needed = config.max_iterations;
     let mut iterations = 0;
     let mut sample = [0usize; MIN_POINTS];
@@ -515,60 +515,19 @@ pub fn ransac_essential_from<R: Rng + ?Sized>(
         let e = if let Some(e) = initial.take() {
             e
         } else {
-            // Eight distinct indices (rejection on the few repeats).
-            let mut k = 0;
-            while k < MIN_POINTS {
-                let i = rng.random_range(0..n);
-                if !sample[..k].contains(&i) {
-                    sample[k] = i;
-                    k += 1;
-                }
-            }
+            draw_sample(n, &mut sample, rng);
             let Ok(e) = eight_point_indices(x1, x2, &sample) else {
                 continue;
             };
             e
         };
-        let (mut flags, mut count, mut score) = consensus(&e, x1, x2, config.threshold);
-        let better =
-            |count: usize, score: f64, best: &Option<(Matrix3<f64>, usize, f64, Vec<bool>)>| {
-                match best {
-                    None => true,
-                    Some((_, c, s, _)) => count > *c || (count == *c && score < *s),
-                }
-            };
+        let (flags, count, score) = consensus(&e, x1, x2, config.threshold);
         if !better(count, score, &best) {
             continue;
         }
-        // Local optimisation (Chum, Matas & Kittler 2003): refit on the inliers of a new best
-        // sample while the consensus grows. A minimal sample is noisy; its inliers are not.
-        let mut e = e;
-        for _ in 0..config.local_refits {
-            let idx: Vec<usize> = (0..n).filter(|&i| flags[i]).collect();
-            let Ok(refit) = eight_point_indices(x1, x2, &idx) else {
-                break;
-            };
-            let (f, c, sc) = consensus(&refit, x1, x2, config.threshold);
-            if c < count || (c == count && sc >= score) {
-                break;
-            }
-            (e, flags, count, score) = (refit, f, c, sc);
-        }
-        best = Some((e, count, score, flags));
-        let w = count as f64 / n as f64;
-        let p_good = w.powi(MIN_POINTS as i32);
-        needed = if p_good >= 1.0 {
-            1
-        } else if p_good <= 0.0 {
-            config.max_iterations
-        } else {
-            let k = (1.0 - config.confidence).ln() / (1.0 - p_good).ln();
-            if k.is_finite() {
-                k.ceil().max(1.0) as usize
-            } else {
-                config.max_iterations
-            }
-        };
+        let hypothesis = local_optimisation((e, count, score, flags), x1, x2, config);
+        needed = iterations_needed(hypothesis.1, n, config);
+        best = Some(hypothesis);
     }
     let (e, count, _, flags) = best.ok_or(Error::Numerical {
         what: "no RANSAC sample gave an essential matrix",
@@ -585,6 +544,79 @@ pub fn ransac_essential_from<R: Rng + ?Sized>(
         n_inliers: count,
         iterations,
     })
+}
+
+/// A RANSAC hypothesis: E, its inlier count, its MSAC score (Σ d² over the inliers) and its
+/// inlier flags.
+type Hypothesis = (Matrix3<f64>, usize, f64, Vec<bool>);
+
+/// Eight distinct indices below `n` into `sample`, drawn uniformly from `rng` (rejection on
+/// the few repeats): the minimal sample of the 8-point algorithm (Fischler & Bolles 1981's
+/// RANSAC with Hartley 1997's normalised 8-point fit).
+fn draw_sample<R: Rng + ?Sized>(n: usize, sample: &mut [usize; MIN_POINTS], rng: &mut R) {
+    let mut k = 0;
+    while k < MIN_POINTS {
+        let i = rng.random_range(0..n);
+        if !sample[..k].contains(&i) {
+            sample[k] = i;
+            k += 1;
+        }
+    }
+}
+
+/// Whether a consensus of `count` inliers with score `score` beats `best`: more inliers, or
+/// as many with a smaller sum of squared distances (an MSAC-style tie-break, after Torr &
+/// Zisserman 2000).
+fn better(count: usize, score: f64, best: &Option<Hypothesis>) -> bool {
+    match best {
+        None => true,
+        Some((_, c, s, _)) => count > *c || (count == *c && score < *s),
+    }
+}
+
+/// Local optimisation (Chum, Matas & Kittler 2003): refit on the inliers of a new best sample
+/// while the consensus grows, up to `config.local_refits` times. A minimal sample is noisy;
+/// its inliers are not.
+fn local_optimisation(
+    sample: Hypothesis,
+    x1: &[Vector2<f64>],
+    x2: &[Vector2<f64>],
+    config: &EssentialConfig,
+) -> Hypothesis {
+    let n = x1.len();
+    let (mut e, mut count, mut score, mut flags) = sample;
+    for _ in 0..config.local_refits {
+        let idx: Vec<usize> = (0..n).filter(|&i| flags[i]).collect();
+        let Ok(refit) = eight_point_indices(x1, x2, &idx) else {
+            break;
+        };
+        let (f, c, sc) = consensus(&refit, x1, x2, config.threshold);
+        if c < count || (c == count && sc >= score) {
+            break;
+        }
+        (e, flags, count, score) = (refit, f, c, sc);
+    }
+    (e, count, score, flags)
+}
+
+/// The adaptive number of samples (Fischler & Bolles 1981; Hartley & Zisserman 2004, §4.7):
+/// k = ln(1 − confidence) / ln(1 − w⁸) for the inlier ratio w = `count` / `n`;
+/// `config.max_iterations` when w = 0 or k is not finite (the loop caps k there too).
+fn iterations_needed(count: usize, n: usize, config: &EssentialConfig) -> usize {
+    let w = count as f64 / n as f64;
+    let p_good = w.powi(MIN_POINTS as i32);
+    if p_good >= 1.0 {
+        1
+    } else if p_good <= 0.0 {
+        config.max_iterations
+    } else {
+        let k = (1.0 - config.confidence).ln() / (1.0 - p_good).ln();
+        if k.is_finite() {
+            k.ceil().max(1.0) as usize
+        } else {
+            config.max_iterations
+        }
+    }
 }
 
 /// The relative pose of view 2 with respect to view 1 from normalised correspondences:

@@ -191,7 +191,49 @@ pub fn localise(cameras: &[CameraTracks], config: &NetworkConfig, seed: u64) -> 
         })?;
     }
     let n = cameras.len();
-    let features: Vec<Vec<FeatureTrack>> = cameras
+    let features = normalised_features(cameras, config);
+    let mut pairs = direct_pairs(cameras, &features, config, seed)?;
+    let (mut tree, mut poses, mut scale_points) = place(&pairs, n, config);
+    // Guided pass: a pair without a matching whose cameras are both placed is matched under
+    // the composed pose's E; its pose then comes from its own points.
+    if config.guided {
+        let guided = guided_pairs(cameras, &features, &pairs, &poses, config, seed)?;
+        if !guided.is_empty() {
+            for (k, m) in guided {
+                pairs[k].route = Some(PoseRoute::Guided);
+                pairs[k].pose = Some(m.estimate.pose);
+                pairs[k].matching = Some(m);
+            }
+            (tree, poses, scale_points) = place(&pairs, n, config);
+        }
+    }
+    let bundle = match &config.bundle {
+        Some(refine) => refine_network(cameras, &features, &pairs, &mut poses, config, refine),
+        None => None,
+    };
+    // Composed poses for the rest.
+    for p in &mut pairs {
+        if p.pose.is_none()
+            && let (Some(pa), Some(pb)) = (poses[p.a], poses[p.b])
+            && let Some(rel) = unit_relative(&pa, &pb)
+        {
+            p.route = Some(PoseRoute::Composed);
+            p.pose = Some(rel);
+        }
+    }
+    Ok(Network {
+        pairs,
+        tree,
+        poses,
+        scale_points,
+        bundle,
+    })
+}
+
+/// Each camera's tracks as feature tracks in normalised image coordinates (K⁻¹ applied to the
+/// configured blob points).
+fn normalised_features(cameras: &[CameraTracks], config: &NetworkConfig) -> Vec<Vec<FeatureTrack>> {
+    cameras
         .iter()
         .map(|c| {
             c.tracks
@@ -202,11 +244,23 @@ pub fn localise(cameras: &[CameraTracks], config: &NetworkConfig, seed: u64) -> 
                 })
                 .collect()
         })
-        .collect();
+        .collect()
+}
+
+/// The direct route for every pair (a < b, in order): its own track correspondence and
+/// relative pose ([`match_tracks`], Meingast, Oh & Sastry 2007), in parallel; pair k draws
+/// from ChaCha8(seed) stream k, so the result does not depend on the thread count.
+fn direct_pairs(
+    cameras: &[CameraTracks],
+    features: &[Vec<FeatureTrack>],
+    config: &NetworkConfig,
+    seed: u64,
+) -> Result<Vec<PairResult>> {
+    let n = cameras.len();
     let pair_ids: Vec<(usize, usize)> = (0..n)
         .flat_map(|a| (a + 1..n).map(move |b| (a, b)))
         .collect();
-    let pairs = pair_ids
+    pair_ids
         .par_iter()
         .enumerate()
         .map(|(k, &(a, b))| -> Result<PairResult> {
@@ -233,99 +287,90 @@ pub fn localise(cameras: &[CameraTracks], config: &NetworkConfig, seed: u64) -> 
                 pose,
             })
         })
-        .collect::<Result<Vec<_>>>()?;
-    let (mut pairs, mut tree, mut poses, mut scale_points) = {
-        let pairs: Vec<PairResult> = pairs;
-        let (tree, poses, scale_points) = place(&pairs, n, config);
-        (pairs, tree, poses, scale_points)
-    };
-    // Guided pass: a pair without a matching whose cameras are both placed is matched under
-    // the composed pose's E; its pose then comes from its own points.
-    if config.guided {
-        let n_pairs = pairs.len() as u64;
-        let guided: Vec<(usize, PairMatching)> = pairs
-            .par_iter()
-            .enumerate()
-            .filter(|(_, p)| p.matching.is_none())
-            .map(|(k, p)| -> Result<Option<(usize, PairMatching)>> {
-                let (Some(pa), Some(pb)) = (poses[p.a], poses[p.b]) else {
-                    return Ok(None);
-                };
-                let Some(rel) = unit_relative(&pa, &pb) else {
-                    return Ok(None);
-                };
-                let mut rng = ChaCha8Rng::seed_from_u64(seed);
-                rng.set_stream(n_pairs + k as u64);
-                let scale = 0.5
-                    * (cameras[p.a].intrinsics.mean_focal() + cameras[p.b].intrinsics.mean_focal());
-                Ok(match_tracks_guided(
-                    &features[p.a],
-                    &features[p.b],
-                    &rel.essential(),
-                    scale,
-                    &config.correspondence,
-                    &mut rng,
-                )?
-                .map(|m| (k, m)))
-            })
-            .collect::<Result<Vec<_>>>()?
-            .into_iter()
-            .flatten()
-            .collect();
-        if !guided.is_empty() {
-            for (k, m) in guided {
-                pairs[k].route = Some(PoseRoute::Guided);
-                pairs[k].pose = Some(m.estimate.pose);
-                pairs[k].matching = Some(m);
-            }
-            (tree, poses, scale_points) = place(&pairs, n, config);
-        }
+        .collect::<Result<Vec<_>>>()
+}
+
+/// The guided route: every pair without a matching whose cameras are both placed, matched
+/// under the E = \[t\]× R of the pose composed through the network (Hartley & Zisserman 2004,
+/// §9.6; [`match_tracks_guided`]), in parallel; pair k draws from ChaCha8(seed) stream
+/// (number of pairs + k). (pair index, matching) of those that found one.
+fn guided_pairs(
+    cameras: &[CameraTracks],
+    features: &[Vec<FeatureTrack>],
+    pairs: &[PairResult],
+    poses: &[Option<Pose>],
+    config: &NetworkConfig,
+    seed: u64,
+) -> Result<Vec<(usize, PairMatching)>> {
+    let n_pairs = pairs.len() as u64;
+    Ok(pairs
+        .par_iter()
+        .enumerate()
+        .filter(|(_, p)| p.matching.is_none())
+        .map(|(k, p)| -> Result<Option<(usize, PairMatching)>> {
+            let (Some(pa), Some(pb)) = (poses[p.a], poses[p.b]) else {
+                return Ok(None);
+            };
+            let Some(rel) = unit_relative(&pa, &pb) else {
+                return Ok(None);
+            };
+            let mut rng = ChaCha8Rng::seed_from_u64(seed);
+            rng.set_stream(n_pairs + k as u64);
+            let scale =
+                0.5 * (cameras[p.a].intrinsics.mean_focal() + cameras[p.b].intrinsics.mean_focal());
+            Ok(match_tracks_guided(
+                &features[p.a],
+                &features[p.b],
+                &rel.essential(),
+                scale,
+                &config.correspondence,
+                &mut rng,
+            )?
+            .map(|m| (k, m)))
+        })
+        .collect::<Result<Vec<_>>>()?
+        .into_iter()
+        .flatten()
+        .collect())
+}
+
+/// The optional joint refinement ([`bundle_adjust`], Triggs et al. 2000) of every placed
+/// camera and the tracks' points seen by two or more of them, with observations gated at
+/// three times the correspondence threshold in the sharpest camera's normalised units. On
+/// success the placed cameras take the refined poses and the summary is returned; `None`
+/// when there is nothing to refine or the refinement fails (the tree's poses stay).
+fn refine_network(
+    cameras: &[CameraTracks],
+    features: &[Vec<FeatureTrack>],
+    pairs: &[PairResult],
+    poses: &mut [Option<Pose>],
+    config: &NetworkConfig,
+    refine: &RefineConfig,
+) -> Option<BundleSummary> {
+    let gate = 3.0 * config.correspondence.threshold_px
+        / cameras
+            .iter()
+            .map(|c| c.intrinsics.mean_focal())
+            .fold(f64::INFINITY, f64::min);
+    let (placed, points, obs) = network_points(features, pairs, poses, gate)?;
+    let b = bundle_adjust(
+        &placed.iter().filter_map(|&c| poses[c]).collect::<Vec<_>>(),
+        &points,
+        &obs,
+        refine,
+    )
+    .ok()?;
+    let poses_before = poses.to_vec();
+    for (&c, pose) in placed.iter().zip(&b.poses) {
+        poses[c] = Some(*pose);
     }
-    let mut bundle = None;
-    if let Some(refine) = &config.bundle {
-        let gate = 3.0 * config.correspondence.threshold_px
-            / cameras
-                .iter()
-                .map(|c| c.intrinsics.mean_focal())
-                .fold(f64::INFINITY, f64::min);
-        if let Some((placed, points, obs)) = network_points(&features, &pairs, &poses, gate)
-            && let Ok(b) = bundle_adjust(
-                &placed.iter().filter_map(|&c| poses[c]).collect::<Vec<_>>(),
-                &points,
-                &obs,
-                refine,
-            )
-        {
-            let poses_before = poses.clone();
-            for (&c, pose) in placed.iter().zip(&b.poses) {
-                poses[c] = Some(*pose);
-            }
-            bundle = Some(BundleSummary {
-                poses_before,
-                points: points.len(),
-                observations: obs.len(),
-                initial_rms: b.initial_rms,
-                final_rms: b.final_rms,
-                iterations: b.iterations,
-            });
-        }
-    }
-    // Composed poses for the rest.
-    for p in &mut pairs {
-        if p.pose.is_none()
-            && let (Some(pa), Some(pb)) = (poses[p.a], poses[p.b])
-            && let Some(rel) = unit_relative(&pa, &pb)
-        {
-            p.route = Some(PoseRoute::Composed);
-            p.pose = Some(rel);
-        }
-    }
-    Ok(Network {
-        pairs,
-        tree,
-        poses,
-        scale_points,
-        bundle,
+    Some(BundleSummary {
+        poses_before,
+        points: points.len(),
+        observations: obs.len(),
+        initial_rms: b.initial_rms,
+        final_rms: b.final_rms,
+        iterations: b.iterations,
     })
 }
 
@@ -345,23 +390,7 @@ type Placement = (Vec<(usize, usize)>, Vec<Option<Pose>>, Vec<usize>);
 
 /// Maximum spanning tree by inliers, scale transfer and poses in camera 0's frame.
 fn place(pairs: &[PairResult], n: usize, config: &NetworkConfig) -> Placement {
-    // Maximum spanning tree (Prim from camera 0, ties to the lower pair index).
-    let weight = |p: &PairResult| p.matching.as_ref().map_or(0, |m| m.estimate.n_inliers);
-    let mut placed = vec![false; n];
-    let mut tree = Vec::new();
-    if n > 0 {
-        placed[0] = true;
-    }
-    loop {
-        let best = pairs
-            .iter()
-            .filter(|p| weight(p) > 0 && placed[p.a] != placed[p.b])
-            .max_by(|p, q| weight(p).cmp(&weight(q)).then((q.a, q.b).cmp(&(p.a, p.b))));
-        let Some(p) = best else { break };
-        let (parent, child) = if placed[p.a] { (p.a, p.b) } else { (p.b, p.a) };
-        placed[child] = true;
-        tree.push((parent, child));
-    }
+    let tree = spanning_tree(pairs, n);
     // Scales and poses along the tree, in placement order.
     let mut poses: Vec<Option<Pose>> = vec![None; n];
     if n > 0 {
@@ -370,53 +399,19 @@ fn place(pairs: &[PairResult], n: usize, config: &NetworkConfig) -> Placement {
     // Scaled edges: (p, c) → scale of the pair's unit translation.
     let mut scaled: BTreeMap<(usize, usize), f64> = BTreeMap::new();
     let mut scale_points = Vec::with_capacity(tree.len());
-    let pair_of = |x: usize, y: usize| {
-        let (a, b) = (x.min(y), x.max(y));
-        pairs.iter().find(|p| p.a == a && p.b == b)
-    };
     for &(p, c) in &tree {
         let Some(parent_pose) = poses[p] else {
             scale_points.push(0);
             continue;
         };
-        let Some(pair) = pair_of(p, c) else { continue };
+        let Some(pair) = pair_of(pairs, p, c) else {
+            continue;
+        };
         let Some(m) = pair.matching.as_ref() else {
             continue;
         };
         let (rel, here) = points_at(pair, m, p);
-        // Reference: the scaled edge at p with the most shared points.
-        let mut best: Option<(usize, f64)> = None;
-        for (&(x, y), &s_ref) in &scaled {
-            let q = if x == p {
-                y
-            } else if y == p {
-                x
-            } else {
-                continue;
-            };
-            let Some(rp) = pair_of(p, q) else { continue };
-            let Some(rm) = rp.matching.as_ref() else {
-                continue;
-            };
-            let (_, there) = points_at(rp, rm, p);
-            let mut ratios: Vec<f64> = here
-                .iter()
-                .filter_map(|(key, x_here)| {
-                    there.get(key).map(|x_there| x_there.norm() / x_here.norm())
-                })
-                .filter(|r| r.is_finite() && *r > 0.0)
-                .collect();
-            // At least one ratio, whatever `min_scale_points` says (0 would mean "any").
-            if ratios.is_empty() || ratios.len() < config.min_scale_points {
-                continue;
-            }
-            ratios.sort_by(f64::total_cmp);
-            let median = ratios[ratios.len() / 2];
-            if best.is_none_or(|(n, _)| ratios.len() > n) {
-                best = Some((ratios.len(), s_ref * median));
-            }
-        }
-        let scale = match best {
+        let scale = match transferred_scale(pairs, &scaled, p, &here, config) {
             Some((npts, s)) => {
                 scale_points.push(npts);
                 s
@@ -440,6 +435,84 @@ fn place(pairs: &[PairResult], n: usize, config: &NetworkConfig) -> Placement {
     (tree, poses, scale_points)
 }
 
+/// The maximum spanning tree of the view graph weighted by inlier count (Prim from camera 0,
+/// ties to the lower pair index), as the camera network of Meingast, Oh & Sastry 2007 is
+/// built: edges (parent, child) in the order the children are placed.
+fn spanning_tree(pairs: &[PairResult], n: usize) -> Vec<(usize, usize)> {
+    let weight = |p: &PairResult| p.matching.as_ref().map_or(0, |m| m.estimate.n_inliers);
+    let mut placed = vec![false; n];
+    let mut tree = Vec::new();
+    if n > 0 {
+        placed[0] = true;
+    }
+    loop {
+        let best = pairs
+            .iter()
+            .filter(|p| weight(p) > 0 && placed[p.a] != placed[p.b])
+            .max_by(|p, q| weight(p).cmp(&weight(q)).then((q.a, q.b).cmp(&(p.a, p.b))));
+        let Some(p) = best else { break };
+        let (parent, child) = if placed[p.a] { (p.a, p.b) } else { (p.b, p.a) };
+        placed[child] = true;
+        tree.push((parent, child));
+    }
+    tree
+}
+
+/// The pair of cameras x and y, in either order.
+fn pair_of(pairs: &[PairResult], x: usize, y: usize) -> Option<&PairResult> {
+    let (a, b) = (x.min(y), x.max(y));
+    pairs.iter().find(|p| p.a == a && p.b == b)
+}
+
+/// The scale of a new edge at camera `p` whose points (in p's frame, keyed by p's track,
+/// frame and feature) are `here`: against the already-scaled edge at p with the most shared
+/// points, that edge's scale times the median ratio of the shared points' distances from p's
+/// centre (at least one ratio and `min_scale_points`). (shared points, scale), or `None`
+/// when no scaled edge at p shares enough.
+fn transferred_scale(
+    pairs: &[PairResult],
+    scaled: &BTreeMap<(usize, usize), f64>,
+    p: usize,
+    here: &PointsByKey,
+    config: &NetworkConfig,
+) -> Option<(usize, f64)> {
+    // Reference: the scaled edge at p with the most shared points.
+    let mut best: Option<(usize, f64)> = None;
+    for (&(x, y), &s_ref) in scaled {
+        let q = if x == p {
+            y
+        } else if y == p {
+            x
+        } else {
+            continue;
+        };
+        let Some(rp) = pair_of(pairs, p, q) else {
+            continue;
+        };
+        let Some(rm) = rp.matching.as_ref() else {
+            continue;
+        };
+        let (_, there) = points_at(rp, rm, p);
+        let mut ratios: Vec<f64> = here
+            .iter()
+            .filter_map(|(key, x_here)| {
+                there.get(key).map(|x_there| x_there.norm() / x_here.norm())
+            })
+            .filter(|r| r.is_finite() && *r > 0.0)
+            .collect();
+        // At least one ratio, whatever `min_scale_points` says (0 would mean "any").
+        if ratios.is_empty() || ratios.len() < config.min_scale_points {
+            continue;
+        }
+        ratios.sort_by(f64::total_cmp);
+        let median = ratios[ratios.len() / 2];
+        if best.is_none_or(|(n, _)| ratios.len() > n) {
+            best = Some((ratios.len(), s_ref * median));
+        }
+    }
+    best
+}
+
 /// Placed cameras (camera 0 first), points and observations for the joint refinement.
 type BundleInput = (Vec<usize>, Vec<Vector3<f64>>, Vec<BundleObservation>);
 
@@ -456,10 +529,10 @@ fn find(parent: &mut [usize], mut x: usize) -> usize {
 
 /// The bundle's points: tracks joined across cameras by the pairs' matches (union-find over
 /// (camera, track)); one point per (object, frame, feature) seen by ≥ 2 placed cameras,
-/// triangulated by multi-view DLT (the null vector of the stacked x P₃ − P₁, y P₃ − P₂ rows,
-/// from the symmetric eigen-decomposition of AᵀA). A camera with two tracks of one object at
-/// one frame is left out of that point; an observation more than `gate` (normalised) from its
-/// reprojection, or behind its camera, is dropped. `None` without camera 0 or points.
+/// triangulated by multi-view DLT ([`triangulate_views`]). A camera with two tracks of one
+/// object at one frame is left out of that point; an observation more than `gate`
+/// (normalised) from its reprojection, or behind its camera, is dropped. `None` without
+/// camera 0 or points.
 fn network_points(
     features: &[Vec<FeatureTrack>],
     pairs: &[PairResult],
@@ -468,6 +541,51 @@ fn network_points(
 ) -> Option<BundleInput> {
     poses.first()?.as_ref()?;
     let placed: Vec<usize> = (0..poses.len()).filter(|&c| poses[c].is_some()).collect();
+    let seen = observations_by_object(features, pairs, poses, &placed);
+    let bundle_poses: Vec<Pose> = placed.iter().filter_map(|&c| poses[c]).collect();
+    let mut points = Vec::new();
+    let mut obs = Vec::new();
+    for list in seen.values() {
+        let mut here: Vec<(usize, Vector2<f64>)> = list
+            .iter()
+            .filter(|(c, _)| list.iter().filter(|(d, _)| d == c).count() == 1)
+            .copied()
+            .collect();
+        if here.len() < 2 {
+            continue;
+        }
+        let Some(x3) = triangulate_views(&bundle_poses, &here) else {
+            continue;
+        };
+        here.retain(|(c, x)| {
+            let y = bundle_poses[*c].apply(&x3);
+            y.z > 0.0 && project(&y).is_some_and(|u| (u - x).norm() <= gate)
+        });
+        if here.len() < 2 || !x3.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        let point = points.len();
+        points.push(x3);
+        obs.extend(
+            here.iter()
+                .map(|&(camera, x)| BundleObservation { camera, point, x }),
+        );
+    }
+    if points.is_empty() {
+        return None;
+    }
+    Some((placed, points, obs))
+}
+
+/// The observations of every (object, frame, feature) by the `placed` cameras, as (bundle
+/// camera, image point) in camera order: an object is a class of (camera, track) joined by
+/// the placed pairs' track matches (union-find with path halving, Tarjan & van Leeuwen 1984).
+fn observations_by_object(
+    features: &[Vec<FeatureTrack>],
+    pairs: &[PairResult],
+    poses: &[Option<Pose>],
+    placed: &[usize],
+) -> BTreeMap<(usize, Frame, usize), Vec<Seen>> {
     let mut slot = vec![usize::MAX; poses.len()];
     for (i, &c) in placed.iter().enumerate() {
         slot[c] = i;
@@ -494,7 +612,7 @@ fn network_points(
     // (object, frame, feature) → observations (bundle camera, image point), and whether a
     // camera saw it twice.
     let mut seen: BTreeMap<(usize, Frame, usize), Vec<Seen>> = BTreeMap::new();
-    for &c in &placed {
+    for &c in placed {
         for (t, track) in features[c].iter().enumerate() {
             let object = find(&mut parent, offset[c] + t);
             for (frame, pts) in track.frames.iter().zip(&track.points) {
@@ -506,55 +624,29 @@ fn network_points(
             }
         }
     }
-    let bundle_poses: Vec<Pose> = placed.iter().filter_map(|&c| poses[c]).collect();
-    let mut points = Vec::new();
-    let mut obs = Vec::new();
-    for list in seen.values() {
-        let mut here: Vec<(usize, Vector2<f64>)> = list
-            .iter()
-            .filter(|(c, _)| list.iter().filter(|(d, _)| d == c).count() == 1)
-            .copied()
-            .collect();
-        if here.len() < 2 {
-            continue;
+    seen
+}
+
+/// Multi-view linear (DLT) triangulation (Hartley & Zisserman 2004, §12.2) of one point seen
+/// at `here` (bundle camera, normalised image point): the null vector of the stacked
+/// x P₃ − P₁, y P₃ − P₂ rows, from the symmetric eigen-decomposition of AᵀA. `None` at
+/// infinity (or when no eigenvalue compares).
+fn triangulate_views(bundle_poses: &[Pose], here: &[Seen]) -> Option<Vector3<f64>> {
+    let mut ata = nalgebra::Matrix4::<f64>::zeros();
+    for (c, x) in here {
+        let q = &bundle_poses[*c];
+        let r = q.rotation.matrix();
+        let row =
+            |i: usize| nalgebra::RowVector4::new(r[(i, 0)], r[(i, 1)], r[(i, 2)], q.translation[i]);
+        for a in [row(0) - row(2) * x.x, row(1) - row(2) * x.y] {
+            ata += a.transpose() * a;
         }
-        let mut ata = nalgebra::Matrix4::<f64>::zeros();
-        for (c, x) in &here {
-            let q = &bundle_poses[*c];
-            let r = q.rotation.matrix();
-            let row = |i: usize| {
-                nalgebra::RowVector4::new(r[(i, 0)], r[(i, 1)], r[(i, 2)], q.translation[i])
-            };
-            for a in [row(0) - row(2) * x.x, row(1) - row(2) * x.y] {
-                ata += a.transpose() * a;
-            }
-        }
-        let eig = ata.symmetric_eigen();
-        let Some(i) = (0..4).min_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]))
-        else {
-            continue;
-        };
-        let h = eig.eigenvectors.column(i);
-        if h[3].abs() < 1e-12 {
-            continue;
-        }
-        let x3 = Vector3::new(h[0], h[1], h[2]) / h[3];
-        here.retain(|(c, x)| {
-            let y = bundle_poses[*c].apply(&x3);
-            y.z > 0.0 && project(&y).is_some_and(|u| (u - x).norm() <= gate)
-        });
-        if here.len() < 2 || !x3.iter().all(|v| v.is_finite()) {
-            continue;
-        }
-        let point = points.len();
-        points.push(x3);
-        obs.extend(
-            here.iter()
-                .map(|&(camera, x)| BundleObservation { camera, point, x }),
-        );
     }
-    if points.is_empty() {
+    let eig = ata.symmetric_eigen();
+    let i = (0..4).min_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]))?;
+    let h = eig.eigenvectors.column(i);
+    if h[3].abs() < 1e-12 {
         return None;
     }
-    Some((placed, points, obs))
+    Some(Vector3::new(h[0], h[1], h[2]) / h[3])
 }

@@ -152,95 +152,21 @@ pub fn refine_two_view(
     x2: &[Vector2<f64>],
     config: &RefineConfig,
 ) -> Result<Refined> {
-    config.check()?;
-    if x1.len() != x2.len() {
-        return Err(Error::LengthMismatch {
-            first: x1.len(),
-            second: x2.len(),
-        });
-    }
-    if x1.len() < crate::essential::MIN_POINTS {
-        return Err(Error::TooFewCorrespondences {
-            found: x1.len(),
-            needed: crate::essential::MIN_POINTS,
-        });
-    }
-    let tn = pose.translation.norm();
-    if !(tn.is_finite() && tn > 0.0) {
-        return Err(Error::ZeroBaseline {
-            parallax_rad: 0.0,
-            threshold_rad: 0.0,
-        });
-    }
-    let mut pose = Pose {
-        rotation: pose.rotation,
-        translation: pose.translation / tn,
-    };
-    // Points that fail to triangulate (at infinity or behind) start at a far point on the
-    // first ray; LM moves them.
-    let mut points: Vec<Vector3<f64>> = x1
-        .iter()
-        .zip(x2)
-        .map(|(a, b)| match triangulate(&pose, a, b) {
-            Some(p) if p.z > 0.0 && pose.apply(&p).z > 0.0 => p,
-            _ => Vector3::new(a.x, a.y, 1.0) * 1e3,
-        })
-        .collect();
+    let (mut pose, mut points) = two_view_start(pose, x1, x2, config)?;
     let initial_cost = cost(&pose, &points, x1, x2);
     let mut current = initial_cost;
     let mut lambda: Option<f64> = None;
     let mut iterations = 0;
     while iterations < config.max_iterations {
         iterations += 1;
-        // Normal equations by blocks.
-        let mut u = SMatrix::<f64, 5, 5>::zeros();
-        let mut g_c = SVector::<f64, 5>::zeros();
-        let mut v = Vec::with_capacity(points.len());
-        let mut w = Vec::with_capacity(points.len());
-        let mut g_p = Vec::with_capacity(points.len());
-        for (x, (a, b)) in points.iter().zip(x1.iter().zip(x2)) {
-            let (r1, r2) = residuals(&pose, x, a, b);
-            let (j1x, j2x, j2c) = jacobians(&pose, x);
-            u += j2c.transpose() * j2c;
-            g_c += j2c.transpose() * r2;
-            v.push(j1x.transpose() * j1x + j2x.transpose() * j2x);
-            w.push(j2c.transpose() * j2x);
-            g_p.push(j1x.transpose() * r1 + j2x.transpose() * r2);
-        }
-        let lam = *lambda.get_or_insert_with(|| {
-            let mean_diag =
-                (u.trace() + v.iter().map(Matrix3::trace).sum::<f64>()) / (5 + 3 * v.len()) as f64;
-            config.initial_damping * mean_diag.max(1e-12)
-        });
-        // Damped system (Marquardt: λ on the diagonal, scaled by it).
-        let damp3 = |m: &Matrix3<f64>| {
-            m + Matrix3::from_diagonal(&m.diagonal()) * lam + Matrix3::identity() * 1e-12
-        };
-        let mut s = u
-            + SMatrix::<f64, 5, 5>::from_diagonal(&u.diagonal()) * lam
-            + SMatrix::<f64, 5, 5>::identity() * 1e-12;
-        let mut rhs = -g_c;
-        let mut v_inv = Vec::with_capacity(v.len());
-        for ((vi, wi), gi) in v.iter().zip(&w).zip(&g_p) {
-            let Some(inv) = damp3(vi).try_inverse() else {
-                return Err(Error::Numerical {
-                    what: "a point block of the refinement is singular",
-                });
-            };
-            s -= wi * inv * wi.transpose();
-            rhs += wi * (inv * gi);
-            v_inv.push(inv);
-        }
-        let Some(dc) = s.cholesky().map(|c| c.solve(&rhs)) else {
+        let normal = TwoViewNormal::build(&pose, &points, x1, x2);
+        let lam = *lambda.get_or_insert_with(|| normal.initial_damping(config));
+        let Some((dc, v_inv)) = normal.solve_camera(lam)? else {
             lambda = Some(lam * 10.0);
             continue;
         };
         let new_pose = step_pose(&pose, &dc);
-        let new_points: Vec<Vector3<f64>> = points
-            .iter()
-            .zip(v_inv.iter().zip(w.iter().zip(&g_p)))
-            .map(|(x, (inv, (wi, gi)))| x + inv * (-gi - wi.transpose() * dc))
-            .collect();
+        let new_points = normal.step_points(&points, &v_inv, &dc);
         let new_cost = cost(&new_pose, &new_points, x1, x2);
         if new_cost.is_finite() && new_cost < current {
             let decrease = (current - new_cost) / current.max(1e-300);
@@ -267,4 +193,140 @@ pub fn refine_two_view(
         rms_reprojection,
         iterations,
     })
+}
+
+/// Checks the inputs of [`refine_two_view`] (in its order of errors) and returns the starting
+/// pose with |t| = 1 and the starting points: the DLT triangulation of each correspondence
+/// (Hartley & Zisserman 2004, §12.2), or, for a point at infinity or behind either camera, a
+/// far point on the first ray that LM moves.
+fn two_view_start(
+    pose: &Pose,
+    x1: &[Vector2<f64>],
+    x2: &[Vector2<f64>],
+    config: &RefineConfig,
+) -> Result<(Pose, Vec<Vector3<f64>>)> {
+    config.check()?;
+    if x1.len() != x2.len() {
+        return Err(Error::LengthMismatch {
+            first: x1.len(),
+            second: x2.len(),
+        });
+    }
+    if x1.len() < crate::essential::MIN_POINTS {
+        return Err(Error::TooFewCorrespondences {
+            found: x1.len(),
+            needed: crate::essential::MIN_POINTS,
+        });
+    }
+    let tn = pose.translation.norm();
+    if !(tn.is_finite() && tn > 0.0) {
+        return Err(Error::ZeroBaseline {
+            parallax_rad: 0.0,
+            threshold_rad: 0.0,
+        });
+    }
+    let pose = Pose {
+        rotation: pose.rotation,
+        translation: pose.translation / tn,
+    };
+    // Points that fail to triangulate (at infinity or behind) start at a far point on the
+    // first ray; LM moves them.
+    let points: Vec<Vector3<f64>> = x1
+        .iter()
+        .zip(x2)
+        .map(|(a, b)| match triangulate(&pose, a, b) {
+            Some(p) if p.z > 0.0 && pose.apply(&p).z > 0.0 => p,
+            _ => Vector3::new(a.x, a.y, 1.0) * 1e3,
+        })
+        .collect();
+    Ok((pose, points))
+}
+
+/// A solved pose step δ = (ω, α, β) and the inverses of the damped point blocks.
+type PoseStep = (SVector<f64, 5>, Vec<Matrix3<f64>>);
+
+/// The two-view normal equations by blocks (the sparse structure of Triggs et al. 2000's
+/// bundle adjustment with one free camera): U (5 × 5, the pose's rotation and tangent
+/// translation), V (3 × 3 per point), W (5 × 3 per point) and the gradients.
+struct TwoViewNormal {
+    u: SMatrix<f64, 5, 5>,
+    g_c: SVector<f64, 5>,
+    v: Vec<Matrix3<f64>>,
+    w: Vec<SMatrix<f64, 5, 3>>,
+    g_p: Vec<Vector3<f64>>,
+}
+
+impl TwoViewNormal {
+    /// Accumulates the blocks over every correspondence at the current pose and points.
+    fn build(
+        pose: &Pose,
+        points: &[Vector3<f64>],
+        x1: &[Vector2<f64>],
+        x2: &[Vector2<f64>],
+    ) -> Self {
+        let mut u = SMatrix::<f64, 5, 5>::zeros();
+        let mut g_c = SVector::<f64, 5>::zeros();
+        let mut v = Vec::with_capacity(points.len());
+        let mut w = Vec::with_capacity(points.len());
+        let mut g_p = Vec::with_capacity(points.len());
+        for (x, (a, b)) in points.iter().zip(x1.iter().zip(x2)) {
+            let (r1, r2) = residuals(pose, x, a, b);
+            let (j1x, j2x, j2c) = jacobians(pose, x);
+            u += j2c.transpose() * j2c;
+            g_c += j2c.transpose() * r2;
+            v.push(j1x.transpose() * j1x + j2x.transpose() * j2x);
+            w.push(j2c.transpose() * j2x);
+            g_p.push(j1x.transpose() * r1 + j2x.transpose() * r2);
+        }
+        Self { u, g_c, v, w, g_p }
+    }
+
+    /// The first damping λ: `initial_damping` times the mean diagonal of the normal matrix.
+    fn initial_damping(&self, config: &RefineConfig) -> f64 {
+        let (u, v) = (&self.u, &self.v);
+        let mean_diag =
+            (u.trace() + v.iter().map(Matrix3::trace).sum::<f64>()) / (5 + 3 * v.len()) as f64;
+        config.initial_damping * mean_diag.max(1e-12)
+    }
+
+    /// The pose step of the damped system (Marquardt: λ on the diagonal, scaled by it) with
+    /// the points eliminated by the Schur complement, and the inverses of the damped point
+    /// blocks. `Ok(None)` when the reduced 5 × 5 system is not positive definite (the caller
+    /// raises λ); an error when a point block is singular.
+    fn solve_camera(&self, lam: f64) -> Result<Option<PoseStep>> {
+        let u = self.u;
+        let damp3 = |m: &Matrix3<f64>| {
+            m + Matrix3::from_diagonal(&m.diagonal()) * lam + Matrix3::identity() * 1e-12
+        };
+        let mut s = u
+            + SMatrix::<f64, 5, 5>::from_diagonal(&u.diagonal()) * lam
+            + SMatrix::<f64, 5, 5>::identity() * 1e-12;
+        let mut rhs = -self.g_c;
+        let mut v_inv = Vec::with_capacity(self.v.len());
+        for ((vi, wi), gi) in self.v.iter().zip(&self.w).zip(&self.g_p) {
+            let Some(inv) = damp3(vi).try_inverse() else {
+                return Err(Error::Numerical {
+                    what: "a point block of the refinement is singular",
+                });
+            };
+            s -= wi * inv * wi.transpose();
+            rhs += wi * (inv * gi);
+            v_inv.push(inv);
+        }
+        Ok(s.cholesky().map(|c| (c.solve(&rhs), v_inv)))
+    }
+
+    /// Each point's back-substituted step, x + V*⁻¹ (−g − Wᵀ δc).
+    fn step_points(
+        &self,
+        points: &[Vector3<f64>],
+        v_inv: &[Matrix3<f64>],
+        dc: &SVector<f64, 5>,
+    ) -> Vec<Vector3<f64>> {
+        points
+            .iter()
+            .zip(v_inv.iter().zip(self.w.iter().zip(&self.g_p)))
+            .map(|(x, (inv, (wi, gi)))| x + inv * (-gi - wi.transpose() * dc))
+            .collect()
+    }
 }

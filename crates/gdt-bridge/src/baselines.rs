@@ -225,90 +225,10 @@ impl BSpline {
     /// vanishes means that the samples do not determine the coefficients (Schoenberg-Whitney
     /// fails: a coefficient without data): [`Error::RankDeficientFit`].
     pub fn fit_lsq(times: &[f64], values: &[f64], weights: &[f64], knots: &[f64]) -> Result<Self> {
-        check_samples(times, values, 1, "a cubic B-spline")?;
-        if weights.len() != times.len() {
-            return Err(Error::LengthMismatch {
-                what: "weights",
-                n_times: times.len(),
-                len: weights.len(),
-            });
-        }
-        for w in weights {
-            ensure_positive(*w, "weights")?;
-        }
-        check_knots(knots)?;
-        let n_basis = knots.len() - K - 1;
-        let (lo, hi) = (knots[K], knots[n_basis]);
-        if let Some(&t) = times.iter().find(|&&t| t < lo || t > hi) {
-            return Err(Error::SampleOutsideKnots {
-                time: t,
-                lower: lo,
-                upper: hi,
-            });
-        }
-        if times.len() < n_basis {
-            return Err(Error::TooFewSamples {
-                what: "the B-spline's coefficients",
-                len: times.len(),
-                min: n_basis,
-            });
-        }
-        // Lower band of the normal matrix: gram[c][d] = G[c][c − d], d = 0..=3.
-        let mut gram = vec![[0.0; 4]; n_basis];
-        let mut rhs = vec![0.0; n_basis];
-        for ((&t, &p), &w) in times.iter().zip(values).zip(weights) {
-            let mu = span(knots, n_basis, t);
-            let b = nonzero_basis(knots, mu, t);
-            let w2 = w * w;
-            let first = mu - K;
-            for r in 0..4 {
-                let wr = w2 * b[r];
-                rhs[first + r] += wr * p;
-                for c in 0..=r {
-                    gram[first + r][r - c] += wr * b[c];
-                }
-            }
-        }
-        // Banded Cholesky G = L Lᵀ in place: gram[i][d] becomes L[i][i − d].
-        for i in 0..n_basis {
-            for d in (0..4).rev() {
-                if d > i {
-                    continue;
-                }
-                let j = i - d;
-                let mut s = gram[i][d];
-                // Σ_k L[i][k] L[j][k] over k < j within both bands.
-                for k in i.saturating_sub(3)..j {
-                    s -= gram[i][i - k] * gram[j][j - k];
-                }
-                if d == 0 {
-                    // The pivot against the scale of the diagonal: a coefficient no sample
-                    // informs leaves a pivot at rounding level.
-                    let scale = gram_diag_scale(&gram, i, s);
-                    if s <= scale * 1e-13 {
-                        return Err(Error::RankDeficientFit);
-                    }
-                    gram[i][0] = s.sqrt();
-                } else {
-                    gram[i][d] = s / gram[j][0];
-                }
-            }
-        }
-        // Forward substitution L z = rhs, then back substitution Lᵀ c = z.
-        for i in 0..n_basis {
-            let mut s = rhs[i];
-            for k in i.saturating_sub(3)..i {
-                s -= gram[i][i - k] * rhs[k];
-            }
-            rhs[i] = s / gram[i][0];
-        }
-        for i in (0..n_basis).rev() {
-            let mut s = rhs[i];
-            for k in i + 1..(i + 4).min(n_basis) {
-                s -= gram[k][k - i] * rhs[k];
-            }
-            rhs[i] = s / gram[i][0];
-        }
+        let n_basis = check_lsq(times, values, weights, knots)?;
+        let (mut gram, mut rhs) = lsq_normal_equations(times, values, weights, knots, n_basis);
+        banded_cholesky(&mut gram)?;
+        banded_solve(&gram, &mut rhs);
         Ok(Self {
             knots: knots.to_vec(),
             coefficients: rhs,
@@ -331,6 +251,123 @@ impl BSpline {
         let mu = span(&self.knots, n_basis, x);
         let b = nonzero_basis(&self.knots, mu, x);
         (0..4).map(|r| b[r] * self.coefficients[mu - K + r]).sum()
+    }
+}
+
+/// Checks the inputs of [`BSpline::fit_lsq`] in its order of errors (samples, weights, knots,
+/// sample times inside the base interval, at least as many samples as coefficients) and
+/// returns the number of basis functions.
+fn check_lsq(times: &[f64], values: &[f64], weights: &[f64], knots: &[f64]) -> Result<usize> {
+    check_samples(times, values, 1, "a cubic B-spline")?;
+    if weights.len() != times.len() {
+        return Err(Error::LengthMismatch {
+            what: "weights",
+            n_times: times.len(),
+            len: weights.len(),
+        });
+    }
+    for w in weights {
+        ensure_positive(*w, "weights")?;
+    }
+    check_knots(knots)?;
+    let n_basis = knots.len() - K - 1;
+    let (lo, hi) = (knots[K], knots[n_basis]);
+    if let Some(&t) = times.iter().find(|&&t| t < lo || t > hi) {
+        return Err(Error::SampleOutsideKnots {
+            time: t,
+            lower: lo,
+            upper: hi,
+        });
+    }
+    if times.len() < n_basis {
+        return Err(Error::TooFewSamples {
+            what: "the B-spline's coefficients",
+            len: times.len(),
+            min: n_basis,
+        });
+    }
+    Ok(n_basis)
+}
+
+/// The weighted normal equations BᵀW²B c = BᵀW²p of the least-squares spline, banded: the
+/// lower band of the normal matrix, gram\[c\]\[d\] = G\[c\]\[c − d\] for d = 0..=3, and the
+/// right-hand side. Each sample adds the outer product of its four non-zero basis values
+/// (de Boor 1978).
+fn lsq_normal_equations(
+    times: &[f64],
+    values: &[f64],
+    weights: &[f64],
+    knots: &[f64],
+    n_basis: usize,
+) -> (Vec<[f64; 4]>, Vec<f64>) {
+    // Lower band of the normal matrix: gram[c][d] = G[c][c − d], d = 0..=3.
+    let mut gram = vec![[0.0; 4]; n_basis];
+    let mut rhs = vec![0.0; n_basis];
+    for ((&t, &p), &w) in times.iter().zip(values).zip(weights) {
+        let mu = span(knots, n_basis, t);
+        let b = nonzero_basis(knots, mu, t);
+        let w2 = w * w;
+        let first = mu - K;
+        for r in 0..4 {
+            let wr = w2 * b[r];
+            rhs[first + r] += wr * p;
+            for c in 0..=r {
+                gram[first + r][r - c] += wr * b[c];
+            }
+        }
+    }
+    (gram, rhs)
+}
+
+/// Banded Cholesky factorisation G = L Lᵀ in place (half-bandwidth 3; Golub & Van Loan,
+/// "Matrix Computations", band Cholesky): gram\[i\]\[d\] becomes L\[i\]\[i − d\]. A pivot at
+/// rounding level against the scale of its diagonal is [`Error::RankDeficientFit`].
+fn banded_cholesky(gram: &mut [[f64; 4]]) -> Result<()> {
+    let n_basis = gram.len();
+    for i in 0..n_basis {
+        for d in (0..4).rev() {
+            if d > i {
+                continue;
+            }
+            let j = i - d;
+            let mut s = gram[i][d];
+            // Σ_k L[i][k] L[j][k] over k < j within both bands.
+            for k in i.saturating_sub(3)..j {
+                s -= gram[i][i - k] * gram[j][j - k];
+            }
+            if d == 0 {
+                // The pivot against the scale of the diagonal: a coefficient no sample
+                // informs leaves a pivot at rounding level.
+                let scale = gram_diag_scale(gram, i, s);
+                if s <= scale * 1e-13 {
+                    return Err(Error::RankDeficientFit);
+                }
+                gram[i][0] = s.sqrt();
+            } else {
+                gram[i][d] = s / gram[j][0];
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Solves L Lᵀ c = rhs in place with the banded factor of [`banded_cholesky`]: forward
+/// substitution L z = rhs, then back substitution Lᵀ c = z.
+fn banded_solve(gram: &[[f64; 4]], rhs: &mut [f64]) {
+    let n_basis = gram.len();
+    for i in 0..n_basis {
+        let mut s = rhs[i];
+        for k in i.saturating_sub(3)..i {
+            s -= gram[i][i - k] * rhs[k];
+        }
+        rhs[i] = s / gram[i][0];
+    }
+    for i in (0..n_basis).rev() {
+        let mut s = rhs[i];
+        for k in i + 1..(i + 4).min(n_basis) {
+            s -= gram[k][k - i] * rhs[k];
+        }
+        rhs[i] = s / gram[i][0];
     }
 }
 

@@ -57,40 +57,60 @@ fn bench_hmm(c: &mut Criterion) {
     let grid = grid_model();
     assert!(grid.transitions().is_sparse());
     let (_, obs) = grid.sample(1000, &mut rng);
+    let runs = BaumWelchRuns::new();
+    bench_grid_sparse(c, &grid, &obs, &runs);
+    bench_grid_dense(c, &grid, &obs, &runs);
+    bench_dense(c, &mut rng, &runs);
+}
+
+/// The Baum-Welch configurations the benchmarks run. `baum_welch(max_iterations = k)` runs
+/// k + 1 E-steps (forward-backward, Rabiner 1989) and k M-steps, so one iteration costs the
+/// difference between the k = 3 and k = 2 runs.
+struct BaumWelchRuns {
+    one: BaumWelchConfig,
+    two: BaumWelchConfig,
+    three: BaumWelchConfig,
+}
+
+impl BaumWelchRuns {
+    fn new() -> Self {
+        let run = |max_iterations| BaumWelchConfig {
+            max_iterations,
+            tolerance: 0.0,
+            ..BaumWelchConfig::default()
+        };
+        Self {
+            one: run(1),
+            two: run(2),
+            three: run(3),
+        }
+    }
+}
+
+/// The 20×20 grid model with its sparse transitions (stay + 4 neighbours): forward-backward,
+/// Viterbi and Baum-Welch on `obs`.
+fn bench_grid_sparse(c: &mut Criterion, grid: &Hmm, obs: &[usize], runs: &BaumWelchRuns) {
     c.bench_function("grid400_forward_backward_T1000", |b| {
-        b.iter(|| posterior(&grid, black_box(&obs)).unwrap())
+        b.iter(|| posterior(grid, black_box(obs)).unwrap())
     });
     c.bench_function("grid400_viterbi_T1000", |b| {
-        b.iter(|| viterbi(&grid, black_box(&obs)).unwrap())
+        b.iter(|| viterbi(grid, black_box(obs)).unwrap())
     });
-    let one_iteration = BaumWelchConfig {
-        max_iterations: 1,
-        tolerance: 0.0,
-        ..BaumWelchConfig::default()
-    };
-    let seqs = vec![obs.clone()];
-    // baum_welch(max_iterations = k) runs k + 1 E-steps and k M-steps, so one iteration costs
-    // the difference between the k = 3 and k = 2 runs.
-    let two = BaumWelchConfig {
-        max_iterations: 2,
-        tolerance: 0.0,
-        ..BaumWelchConfig::default()
-    };
-    let three = BaumWelchConfig {
-        max_iterations: 3,
-        tolerance: 0.0,
-        ..BaumWelchConfig::default()
-    };
+    let seqs = vec![obs.to_vec()];
     c.bench_function("grid400_baum_welch_2_iterations_T1000", |b| {
-        b.iter(|| baum_welch(&grid, black_box(&seqs), &two).unwrap())
+        b.iter(|| baum_welch(grid, black_box(&seqs), &runs.two).unwrap())
     });
     c.bench_function("grid400_baum_welch_3_iterations_T1000", |b| {
-        b.iter(|| baum_welch(&grid, black_box(&seqs), &three).unwrap())
+        b.iter(|| baum_welch(grid, black_box(&seqs), &runs.three).unwrap())
     });
     c.bench_function("grid400_baum_welch_iteration_T1000", |b| {
-        b.iter(|| baum_welch(&grid, black_box(&seqs), &one_iteration).unwrap())
+        b.iter(|| baum_welch(grid, black_box(&seqs), &runs.one).unwrap())
     });
-    // The same grid model with A stored dense: N² work per step, like hmmlearn's.
+}
+
+/// The same grid model with A stored dense: N² work per step, like hmmlearn's (the
+/// like-for-like comparison with docs/comparisons/hmmlearn_grid400.py).
+fn bench_grid_dense(c: &mut Criterion, grid: &Hmm, obs: &[usize], runs: &BaumWelchRuns) {
     let grid_dense = Hmm::new(
         grid.initial().to_vec(),
         grid.transitions().to_storage(StorageChoice::Dense),
@@ -99,24 +119,30 @@ fn bench_hmm(c: &mut Criterion) {
     )
     .unwrap();
     assert!(!grid_dense.transitions().is_sparse());
+    let seqs = vec![obs.to_vec()];
     c.bench_function("grid400_dense_forward_backward_T1000", |b| {
-        b.iter(|| posterior(&grid_dense, black_box(&obs)).unwrap())
+        b.iter(|| posterior(&grid_dense, black_box(obs)).unwrap())
     });
     c.bench_function("grid400_dense_viterbi_T1000", |b| {
-        b.iter(|| viterbi(&grid_dense, black_box(&obs)).unwrap())
+        b.iter(|| viterbi(&grid_dense, black_box(obs)).unwrap())
     });
     c.bench_function("grid400_dense_baum_welch_iteration_T1000", |b| {
-        b.iter(|| baum_welch(&grid_dense, black_box(&seqs), &one_iteration).unwrap())
+        b.iter(|| baum_welch(&grid_dense, black_box(&seqs), &runs.one).unwrap())
     });
     c.bench_function("grid400_dense_baum_welch_2_iterations_T1000", |b| {
-        b.iter(|| baum_welch(&grid_dense, black_box(&seqs), &two).unwrap())
+        b.iter(|| baum_welch(&grid_dense, black_box(&seqs), &runs.two).unwrap())
     });
     c.bench_function("grid400_dense_baum_welch_3_iterations_T1000", |b| {
-        b.iter(|| baum_welch(&grid_dense, black_box(&seqs), &three).unwrap())
+        b.iter(|| baum_welch(&grid_dense, black_box(&seqs), &runs.three).unwrap())
     });
-    let dense = dense_model(&mut rng);
+}
+
+/// A dense N = 400 model with every transition possible (drawn from `rng`, after the grid's
+/// observations) and its own observations; its Baum-Welch runs in a group of 10 samples.
+fn bench_dense(c: &mut Criterion, rng: &mut ChaCha8Rng, runs: &BaumWelchRuns) {
+    let dense = dense_model(rng);
     assert!(!dense.transitions().is_sparse());
-    let (_, obs) = dense.sample(1000, &mut rng);
+    let (_, obs) = dense.sample(1000, rng);
     c.bench_function("dense400_forward_backward_T1000", |b| {
         b.iter(|| posterior(&dense, black_box(&obs)).unwrap())
     });
@@ -128,10 +154,10 @@ fn bench_hmm(c: &mut Criterion) {
     let mut slow = c.benchmark_group("dense400_baum_welch");
     slow.sample_size(10);
     slow.bench_function("dense400_baum_welch_2_iterations_T1000", |b| {
-        b.iter(|| baum_welch(&dense, black_box(&dense_seqs), &two).unwrap())
+        b.iter(|| baum_welch(&dense, black_box(&dense_seqs), &runs.two).unwrap())
     });
     slow.bench_function("dense400_baum_welch_3_iterations_T1000", |b| {
-        b.iter(|| baum_welch(&dense, black_box(&dense_seqs), &three).unwrap())
+        b.iter(|| baum_welch(&dense, black_box(&dense_seqs), &runs.three).unwrap())
     });
     slow.finish();
 }

@@ -199,34 +199,10 @@ pub fn fuse(p: &[f64], q: &[f64], config: &FusionConfig) -> Result<Fused> {
             distribution: p.iter().zip(q).map(|(a, b)| 0.5 * (a + b)).collect(),
             omega: None,
         }),
-        FusionCriterion::Bayesian { prior } => {
-            let n = p.len();
-            let uniform = vec![1.0 / n as f64; n];
-            let prior = prior.as_deref().unwrap_or(&uniform);
-            check_len("fusion prior", prior.len(), n)?;
-            let mut logs = Vec::with_capacity(n);
-            for k in 0..n {
-                let evidence = p[k] * q[k];
-                if evidence > 0.0 && prior[k] <= 0.0 {
-                    return Err(Error::InvalidEntry {
-                        what: "fusion prior (zero where both beliefs are positive)",
-                        row: k,
-                        col: 0,
-                        value: prior[k],
-                    });
-                }
-                logs.push(if evidence > 0.0 {
-                    p[k].ln() + q[k].ln() - prior[k].ln()
-                } else {
-                    f64::NEG_INFINITY
-                });
-            }
-            let distribution = normalise_logs(&logs).ok_or(Error::DisjointSupports)?;
-            Ok(Fused {
-                distribution,
-                omega: None,
-            })
-        }
+        FusionCriterion::Bayesian { prior } => Ok(Fused {
+            distribution: bayesian(p, q, prior.as_deref())?,
+            omega: None,
+        }),
         FusionCriterion::Chernoff => {
             let omega = chernoff_omega(p, q, config.omega_tolerance)?;
             Ok(Fused {
@@ -235,34 +211,70 @@ pub fn fuse(p: &[f64], q: &[f64], config: &FusionConfig) -> Result<Fused> {
             })
         }
         FusionCriterion::Shannon => {
-            let h = |omega: f64| at(omega).map(|r| entropy(&r, EntropyUnit::Nats));
-            let n = config.grid_points;
-            let mut best = (0, f64::INFINITY);
-            for k in 0..n {
-                let v = h(k as f64 / (n - 1) as f64)?;
-                if v < best.1 {
-                    best = (k, v);
-                }
-            }
-            let step = 1.0 / (n - 1) as f64;
-            let lo = (best.0 as f64 - 1.0).max(0.0) * step;
-            let hi = (best.0 as f64 + 1.0).min((n - 1) as f64) * step;
-            let omega = golden_section(lo, hi, config.omega_tolerance, |w| {
-                h(w).unwrap_or(f64::INFINITY)
-            });
-            // Keep the grid point if the refinement did not improve on it (an endpoint, where
-            // the support jumps, can be the minimum).
-            let omega = if h(omega)? <= best.1 {
-                omega
-            } else {
-                best.0 as f64 * step
-            };
+            let omega = shannon_omega(p, q, config)?;
             Ok(Fused {
                 distribution: at(omega)?,
                 omega: Some(omega),
             })
         }
     }
+}
+
+/// Bayesian fusion of two beliefs from a common prior (the independent-likelihood pool):
+/// r ∝ p q / prior, computed in logarithms and normalised ([`normalise_logs`]). The prior
+/// defaults to uniform; it must be positive wherever both beliefs are.
+fn bayesian(p: &[f64], q: &[f64], prior: Option<&[f64]>) -> Result<Vec<f64>> {
+    let n = p.len();
+    let uniform = vec![1.0 / n as f64; n];
+    let prior = prior.unwrap_or(&uniform);
+    check_len("fusion prior", prior.len(), n)?;
+    let mut logs = Vec::with_capacity(n);
+    for k in 0..n {
+        let evidence = p[k] * q[k];
+        if evidence > 0.0 && prior[k] <= 0.0 {
+            return Err(Error::InvalidEntry {
+                what: "fusion prior (zero where both beliefs are positive)",
+                row: k,
+                col: 0,
+                value: prior[k],
+            });
+        }
+        logs.push(if evidence > 0.0 {
+            p[k].ln() + q[k].ln() - prior[k].ln()
+        } else {
+            f64::NEG_INFINITY
+        });
+    }
+    normalise_logs(&logs).ok_or(Error::DisjointSupports)
+}
+
+/// The weight ω of the geometric mixture r_ω ∝ p^ω q^{1−ω} ([`geometric_mixture`]) with the
+/// least Shannon entropy: the best of `grid_points` equally spaced ω, then golden-section
+/// search (Kiefer 1953) between its grid neighbours.
+fn shannon_omega(p: &[f64], q: &[f64], config: &FusionConfig) -> Result<f64> {
+    let at = |omega: f64| geometric_mixture(p, q, omega).ok_or(Error::DisjointSupports);
+    let h = |omega: f64| at(omega).map(|r| entropy(&r, EntropyUnit::Nats));
+    let n = config.grid_points;
+    let mut best = (0, f64::INFINITY);
+    for k in 0..n {
+        let v = h(k as f64 / (n - 1) as f64)?;
+        if v < best.1 {
+            best = (k, v);
+        }
+    }
+    let step = 1.0 / (n - 1) as f64;
+    let lo = (best.0 as f64 - 1.0).max(0.0) * step;
+    let hi = (best.0 as f64 + 1.0).min((n - 1) as f64) * step;
+    let omega = golden_section(lo, hi, config.omega_tolerance, |w| {
+        h(w).unwrap_or(f64::INFINITY)
+    });
+    // Keep the grid point if the refinement did not improve on it (an endpoint, where
+    // the support jumps, can be the minimum).
+    Ok(if h(omega)? <= best.1 {
+        omega
+    } else {
+        best.0 as f64 * step
+    })
 }
 
 /// The Chernoff point: g(ω) = D(r_ω‖p) − D(r_ω‖q) = −E_{r_ω}[log p/q] has derivative

@@ -300,20 +300,6 @@ pub(crate) fn sinkhorn_unchecked(
 ) -> Result<SinkhornReport> {
     let mut row_sums = vec![0.0; n_rows];
     let mut col_sums = vec![0.0; n_cols];
-    let sums = |a: &[f64], row_sums: &mut [f64], col_sums: &mut [f64]| {
-        col_sums.iter_mut().for_each(|c| *c = 0.0);
-        for (i, row) in a.chunks_exact(n_cols.max(1)).enumerate().take(n_rows) {
-            row_sums[i] = row.iter().sum();
-            for (c, v) in col_sums.iter_mut().zip(row) {
-                *c += v;
-            }
-        }
-    };
-    let error = |row_sums: &[f64], col_sums: &[f64]| {
-        let r = row_sums.iter().zip(row_targets).map(|(s, t)| (s - t).abs());
-        let c = col_sums.iter().zip(col_targets).map(|(s, t)| (s - t).abs());
-        r.chain(c).fold(0.0_f64, f64::max)
-    };
     if n_rows == 0 || n_cols == 0 {
         return Ok(SinkhornReport {
             iterations: 0,
@@ -321,8 +307,8 @@ pub(crate) fn sinkhorn_unchecked(
             max_marginal_error: 0.0,
         });
     }
-    sums(a, &mut row_sums, &mut col_sums);
-    let mut err = error(&row_sums, &col_sums);
+    marginal_sums(a, n_rows, n_cols, &mut row_sums, &mut col_sums);
+    let mut err = marginal_error(&row_sums, &col_sums, row_targets, col_targets);
     if err <= config.tolerance {
         return Ok(SinkhornReport {
             iterations: 0,
@@ -330,9 +316,73 @@ pub(crate) fn sinkhorn_unchecked(
             max_marginal_error: err,
         });
     }
-    // An entry survives the first pass iff its row and column targets are positive, and then
-    // stays positive; a line with a positive target and no surviving entry would fail midway,
-    // so it is rejected before anything is changed.
+    check_lines_alive(a, n_rows, n_cols, row_targets, col_targets)?;
+    let mut factors = vec![0.0; n_cols];
+    for iteration in 1..=config.max_iterations {
+        err = sinkhorn_iteration(
+            a,
+            n_cols,
+            (&mut row_sums, &mut col_sums),
+            &mut factors,
+            row_targets,
+            col_targets,
+        )?;
+        if err <= config.tolerance {
+            return Ok(SinkhornReport {
+                iterations: iteration,
+                converged: true,
+                max_marginal_error: err,
+            });
+        }
+    }
+    Ok(SinkhornReport {
+        iterations: config.max_iterations,
+        converged: false,
+        max_marginal_error: err,
+    })
+}
+
+/// The row and column sums of `a` (row-major, `n_rows` × `n_cols`) into `row_sums` and
+/// `col_sums`.
+fn marginal_sums(
+    a: &[f64],
+    n_rows: usize,
+    n_cols: usize,
+    row_sums: &mut [f64],
+    col_sums: &mut [f64],
+) {
+    col_sums.iter_mut().for_each(|c| *c = 0.0);
+    for (i, row) in a.chunks_exact(n_cols.max(1)).enumerate().take(n_rows) {
+        row_sums[i] = row.iter().sum();
+        for (c, v) in col_sums.iter_mut().zip(row) {
+            *c += v;
+        }
+    }
+}
+
+/// The largest distance of a row or column sum from its target.
+fn marginal_error(
+    row_sums: &[f64],
+    col_sums: &[f64],
+    row_targets: &[f64],
+    col_targets: &[f64],
+) -> f64 {
+    let r = row_sums.iter().zip(row_targets).map(|(s, t)| (s - t).abs());
+    let c = col_sums.iter().zip(col_targets).map(|(s, t)| (s - t).abs());
+    r.chain(c).fold(0.0_f64, f64::max)
+}
+
+/// Rejects, before anything is changed, a line that Sinkhorn's first pass would leave empty
+/// against a positive target: an entry survives the first pass iff its row and column
+/// targets are positive, and then stays positive, so a line with a positive target and no
+/// surviving entry would fail midway ([`Error::NotScalable`]; rows first, then columns).
+fn check_lines_alive(
+    a: &[f64],
+    n_rows: usize,
+    n_cols: usize,
+    row_targets: &[f64],
+    col_targets: &[f64],
+) -> Result<()> {
     let alive = |i: usize, j: usize| {
         a[i * n_cols + j] > 0.0 && row_targets[i] > 0.0 && col_targets[j] > 0.0
     };
@@ -352,47 +402,47 @@ pub(crate) fn sinkhorn_unchecked(
             });
         }
     }
-    let mut factors = vec![0.0; n_cols];
-    for iteration in 1..=config.max_iterations {
-        // Rows: scale to the targets, accumulating the new column sums.
-        col_sums.iter_mut().for_each(|c| *c = 0.0);
-        for (i, row) in a.chunks_exact_mut(n_cols).enumerate() {
-            let f = scale_factor(row_sums[i], row_targets[i])?;
-            for (c, v) in col_sums.iter_mut().zip(row.iter_mut()) {
-                *v *= f;
-                *c += *v;
-            }
-        }
-        for (j, f) in factors.iter_mut().enumerate() {
-            *f = scale_factor(col_sums[j], col_targets[j])?;
-        }
-        // Columns: scale to the targets, accumulating the new row sums.
-        for (i, row) in a.chunks_exact_mut(n_cols).enumerate() {
-            let mut s = 0.0;
-            for (v, f) in row.iter_mut().zip(&factors) {
-                *v *= f;
-                s += *v;
-            }
-            row_sums[i] = s;
-        }
-        err = row_sums
-            .iter()
-            .zip(row_targets)
-            .map(|(s, t)| (s - t).abs())
-            .fold(0.0, f64::max);
-        if err <= config.tolerance {
-            return Ok(SinkhornReport {
-                iterations: iteration,
-                converged: true,
-                max_marginal_error: err,
-            });
+    Ok(())
+}
+
+/// One Sinkhorn-Knopp iteration (Sinkhorn 1964; iterative proportional fitting) in two
+/// passes: scale the rows to their targets, accumulating the new column sums; then scale the
+/// columns to theirs (`factors` is scratch), accumulating the new row sums. Returns the
+/// largest row-sum error (the columns are exact after the second pass).
+fn sinkhorn_iteration(
+    a: &mut [f64],
+    n_cols: usize,
+    (row_sums, col_sums): (&mut [f64], &mut [f64]),
+    factors: &mut [f64],
+    row_targets: &[f64],
+    col_targets: &[f64],
+) -> Result<f64> {
+    // Rows: scale to the targets, accumulating the new column sums.
+    col_sums.iter_mut().for_each(|c| *c = 0.0);
+    for (i, row) in a.chunks_exact_mut(n_cols).enumerate() {
+        let f = scale_factor(row_sums[i], row_targets[i])?;
+        for (c, v) in col_sums.iter_mut().zip(row.iter_mut()) {
+            *v *= f;
+            *c += *v;
         }
     }
-    Ok(SinkhornReport {
-        iterations: config.max_iterations,
-        converged: false,
-        max_marginal_error: err,
-    })
+    for (j, f) in factors.iter_mut().enumerate() {
+        *f = scale_factor(col_sums[j], col_targets[j])?;
+    }
+    // Columns: scale to the targets, accumulating the new row sums.
+    for (i, row) in a.chunks_exact_mut(n_cols).enumerate() {
+        let mut s = 0.0;
+        for (v, f) in row.iter_mut().zip(factors.iter()) {
+            *v *= f;
+            s += *v;
+        }
+        row_sums[i] = s;
+    }
+    Ok(row_sums
+        .iter()
+        .zip(row_targets)
+        .map(|(s, t)| (s - t).abs())
+        .fold(0.0, f64::max))
 }
 
 /// The factor that takes a line summing to `sum` to `target`; a positive target on an empty

@@ -337,73 +337,13 @@ impl ImageDetector {
         if !self.trained || inside_fraction(around, iw, ih) < self.config.min_inside {
             return None;
         }
-        let (cw, ch, k) = (self.cells_w, self.cells_h, self.config.search);
-        let wc = self.config.colour_weight;
+        let (cw, ch) = (self.cells_w, self.cells_h);
         // Per scale: (score, conf, rho, px, py), and the patch.
         let per_scale: Vec<Option<(Patch, Candidate)>> = self
             .config
             .scales
             .par_iter()
-            .map(|&s| {
-                let c = around.centre();
-                let b = BoundingBox {
-                    left: c.x - around.width * s / 2.0,
-                    top: c.y - around.height * s / 2.0,
-                    width: around.width * s,
-                    height: around.height * s,
-                };
-                let p = patch(image, &b, k, cw, ch)?;
-                let integral = OrientedIntegral::compute(&p.plane);
-                let (max_px, max_py) = ((k - 1) * cw * CELL, (k - 1) * ch * CELL);
-                let mut boosted: Vec<(f64, usize, usize)> =
-                    Vec::with_capacity((CELL / X_STEP) * (CELL / Y_STEP) * (k * cw) * (k * ch));
-                for oy in (0..CELL).step_by(Y_STEP) {
-                    for ox in (0..CELL).step_by(X_STEP) {
-                        let Some(cells) = integral.cells(ox, oy) else {
-                            continue;
-                        };
-                        let blocks = BlockGrid::from_cells(&cells);
-                        for py in (oy..=max_py).step_by(CELL) {
-                            for px in (ox..=max_px).step_by(CELL) {
-                                let (x0, y0) = (px / CELL, py / CELL);
-                                if x0 + cw > cells.cells_x() || y0 + ch > cells.cells_y() {
-                                    continue;
-                                }
-                                let conf = self
-                                    .booster
-                                    .soft_confidence(self.feature_at(&blocks, x0, y0));
-                                boosted.push((conf, px, py));
-                            }
-                        }
-                    }
-                }
-                // Best first; ties in a fixed order (top-left first).
-                let order = |a: &(f64, usize, usize), b: &(f64, usize, usize)| {
-                    b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)).then(a.1.cmp(&b.1))
-                };
-                if boosted.len() > COLOUR_CANDIDATES {
-                    boosted.select_nth_unstable_by(COLOUR_CANDIDATES, order);
-                    boosted.truncate(COLOUR_CANDIDATES);
-                }
-                boosted.sort_by(order);
-                let penalty = self.config.scale_penalty * s.ln().abs();
-                let best = boosted
-                    .iter()
-                    .map(|&(conf, px, py)| {
-                        let rho = if wc > 0.0 {
-                            self.window_colour(&p, px, py).bhattacharyya(&self.colour)
-                        } else {
-                            0.0
-                        };
-                        let score = (1.0 - wc) * (conf + 1.0) / 2.0 + wc * rho - penalty;
-                        (score, conf, rho, px, py)
-                    })
-                    .fold(None, |acc: Option<Candidate>, x| match acc {
-                        Some(a) if a.0 >= x.0 => Some(a),
-                        _ => Some(x),
-                    })?;
-                Some((p, best))
-            })
+            .map(|&s| self.search_scale(image, around, s))
             .collect();
         // Best over scales (ties: the earlier scale).
         let (p, (score, conf, rho, px, py)) = per_scale.iter().flatten().fold(
@@ -428,6 +368,88 @@ impl ImageDetector {
             boost: *conf,
             colour: *rho,
         })
+    }
+
+    /// The best window at scale `s`: the patch `search` times the box (times s) around its
+    /// centre, the `COLOUR_CANDIDATES` windows the booster likes best, and among them the best
+    /// by (1 − w_c)(c + 1)/2 + w_c ρ minus the scale penalty (ties: the booster's order).
+    /// `None` when the patch is empty or has no window.
+    fn search_scale(
+        &self,
+        image: &RgbImage,
+        around: &BoundingBox,
+        s: f64,
+    ) -> Option<(Patch, Candidate)> {
+        let (cw, ch, k) = (self.cells_w, self.cells_h, self.config.search);
+        let wc = self.config.colour_weight;
+        let c = around.centre();
+        let b = BoundingBox {
+            left: c.x - around.width * s / 2.0,
+            top: c.y - around.height * s / 2.0,
+            width: around.width * s,
+            height: around.height * s,
+        };
+        let p = patch(image, &b, k, cw, ch)?;
+        let mut boosted = self.boosted_windows(&p);
+        // Best first; ties in a fixed order (top-left first).
+        let order = |a: &(f64, usize, usize), b: &(f64, usize, usize)| {
+            b.0.total_cmp(&a.0).then(a.2.cmp(&b.2)).then(a.1.cmp(&b.1))
+        };
+        if boosted.len() > COLOUR_CANDIDATES {
+            boosted.select_nth_unstable_by(COLOUR_CANDIDATES, order);
+            boosted.truncate(COLOUR_CANDIDATES);
+        }
+        boosted.sort_by(order);
+        let penalty = self.config.scale_penalty * s.ln().abs();
+        let best = boosted
+            .iter()
+            .map(|&(conf, px, py)| {
+                let rho = if wc > 0.0 {
+                    self.window_colour(&p, px, py).bhattacharyya(&self.colour)
+                } else {
+                    0.0
+                };
+                let score = (1.0 - wc) * (conf + 1.0) / 2.0 + wc * rho - penalty;
+                (score, conf, rho, px, py)
+            })
+            .fold(None, |acc: Option<Candidate>, x| match acc {
+                Some(a) if a.0 >= x.0 => Some(a),
+                _ => Some(x),
+            })?;
+        Some((p, best))
+    }
+
+    /// The boosting confidence of every object-sized window of patch `p`, every `X_STEP`
+    /// pixels across and `Y_STEP` down, as (confidence, left, top): one integral of the
+    /// orientation votes gives the HOG cell grid (Dalal & Triggs 2005) at each sub-cell
+    /// offset, and its blocks feed the online booster (Grabner & Bischof 2006).
+    fn boosted_windows(&self, p: &Patch) -> Vec<(f64, usize, usize)> {
+        let (cw, ch, k) = (self.cells_w, self.cells_h, self.config.search);
+        let integral = OrientedIntegral::compute(&p.plane);
+        let (max_px, max_py) = ((k - 1) * cw * CELL, (k - 1) * ch * CELL);
+        let mut boosted: Vec<(f64, usize, usize)> =
+            Vec::with_capacity((CELL / X_STEP) * (CELL / Y_STEP) * (k * cw) * (k * ch));
+        for oy in (0..CELL).step_by(Y_STEP) {
+            for ox in (0..CELL).step_by(X_STEP) {
+                let Some(cells) = integral.cells(ox, oy) else {
+                    continue;
+                };
+                let blocks = BlockGrid::from_cells(&cells);
+                for py in (oy..=max_py).step_by(CELL) {
+                    for px in (ox..=max_px).step_by(CELL) {
+                        let (x0, y0) = (px / CELL, py / CELL);
+                        if x0 + cw > cells.cells_x() || y0 + ch > cells.cells_y() {
+                            continue;
+                        }
+                        let conf = self
+                            .booster
+                            .soft_confidence(self.feature_at(&blocks, x0, y0));
+                        boosted.push((conf, px, py));
+                    }
+                }
+            }
+        }
+        boosted
     }
 }
 

@@ -78,7 +78,7 @@ pub enum GapDistribution {
 #[serde(rename_all = "snake_case", deny_unknown_fields)]
 pub enum TrackInit {
     /// Position N(y₁, R), velocity N(0, σ_v² I) with σ_v² = `velocity_variance`, or v̄²/3 (the
-    /// variance of a speed uniform on the disc of radius v̄) when unset; likelihood terms from
+    /// variance of each velocity component uniform on [−v̄, v̄]) when unset; likelihood terms from
     /// the second measurement on (default).
     FirstMeasurement {
         /// Per-axis variance of the initial velocity.
@@ -289,60 +289,11 @@ impl McmcdaConfig {
     /// positive: these are the conditions of the paper's Theorem 4 (ergodicity), and they keep
     /// every logarithm finite.
     pub fn check(&self) -> Result<Model> {
-        ensure_positive(self.volume, "volume")?;
-        ensure_positive(self.births_per_scan, "births_per_scan")?;
-        ensure_positive(self.clutter_per_scan, "clutter_per_scan")?;
-        ensure_open_probability(self.p_disappear, "p_disappear")?;
-        ensure_open_probability(self.p_detect, "p_detect")?;
-        ensure_open_probability(self.stop_probability, "stop_probability")?;
-        ensure_positive(self.max_speed, "max_speed")?;
-        ensure_in_range(self.head_probability, 0.0, 1.0, "head_probability")?;
-        if self.max_gap == 0 || self.max_gap > 64 {
-            return Err(invalid_parameter(
-                "max_gap",
-                format!("{} must lie in 1..=64", self.max_gap),
-            ));
-        }
-        tracker_model::cholesky_checked(&self.measurement_noise, "measurement_noise")?;
-        let weights = &self.move_weights.0;
-        if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) || weights[0] <= 0.0 {
-            return Err(invalid_parameter(
-                "move_weights",
-                format!("{weights:?} must be finite and ≥ 0, with birth > 0"),
-            ));
-        }
+        self.check_scalars()?;
         let dt = self.motion.dt_s();
         let radius_per_scan = self.max_speed * dt;
-        let initial_velocity_variance = match self.track_init {
-            TrackInit::FirstMeasurement {
-                velocity_variance: Some(v),
-            } => {
-                ensure_positive(v, "velocity_variance")?;
-                v
-            }
-            TrackInit::FirstMeasurement {
-                velocity_variance: None,
-            } => self.max_speed * self.max_speed / 3.0,
-            TrackInit::TwoPoint { initial_covariance } => {
-                check_positive_semidefinite(&initial_covariance, "initial_covariance")?;
-                0.0
-            }
-        };
-        let d_bar = self.max_gap as usize;
-        let raw: Vec<f64> = (0..d_bar)
-            .map(|i| match self.gap_distribution {
-                GapDistribution::Geometric => self.p_detect * (1.0 - self.p_detect).powi(i as i32),
-                GapDistribution::Uniform => 1.0,
-            })
-            .collect();
-        let total: f64 = raw.iter().sum();
-        let zeta: Vec<f64> = raw.iter().map(|z| z / total).collect();
-        let mut zeta_cdf = Vec::with_capacity(d_bar);
-        let mut acc = 0.0;
-        for z in &zeta {
-            acc += z;
-            zeta_cdf.push(acc);
-        }
+        let initial_velocity_variance = self.initial_velocity_variance()?;
+        let (zeta, zeta_cdf) = self.zeta_table();
         let velocity_term = match self.track_init {
             TrackInit::TwoPoint { .. } => -(std::f64::consts::PI * self.max_speed.powi(2)).ln(),
             TrackInit::FirstMeasurement { .. } => 0.0,
@@ -351,20 +302,7 @@ impl McmcdaConfig {
         let process_noise: Vec<Matrix4<f64>> = (1..=self.max_gap)
             .map(|d| self.motion.process_noise(d))
             .collect();
-        // x–y entries of a 4 × 4 covariance ordered [x, y, vx, vy].
-        let uncoupled4 = |m: &Matrix4<f64>| {
-            [(0, 1), (0, 3), (1, 2), (2, 3)]
-                .iter()
-                .all(|&(i, j)| m[(i, j)] == 0.0 && m[(j, i)] == 0.0)
-        };
-        let r = &self.measurement_noise;
-        let axes_decoupled = r[(0, 1)] == 0.0
-            && r[(1, 0)] == 0.0
-            && process_noise.iter().all(uncoupled4)
-            && match self.track_init {
-                TrackInit::FirstMeasurement { .. } => true,
-                TrackInit::TwoPoint { initial_covariance } => uncoupled4(&initial_covariance),
-            };
+        let axes_decoupled = self.axes_decoupled(&process_noise);
         let move_table: [[f64; 8]; 3] = std::array::from_fn(|k| {
             std::array::from_fn(|i| self.move_weights.probability(Move::ALL[i], k))
         });
@@ -389,6 +327,97 @@ impl McmcdaConfig {
             initial_velocity_variance,
             config: self.clone(),
         })
+    }
+
+    /// Checks the scalar fields, the measurement noise and the move weights, in that order
+    /// (the first failure is reported).
+    fn check_scalars(&self) -> Result<()> {
+        ensure_positive(self.volume, "volume")?;
+        ensure_positive(self.births_per_scan, "births_per_scan")?;
+        ensure_positive(self.clutter_per_scan, "clutter_per_scan")?;
+        ensure_open_probability(self.p_disappear, "p_disappear")?;
+        ensure_open_probability(self.p_detect, "p_detect")?;
+        ensure_open_probability(self.stop_probability, "stop_probability")?;
+        ensure_positive(self.max_speed, "max_speed")?;
+        ensure_in_range(self.head_probability, 0.0, 1.0, "head_probability")?;
+        if self.max_gap == 0 || self.max_gap > 64 {
+            return Err(invalid_parameter(
+                "max_gap",
+                format!("{} must lie in 1..=64", self.max_gap),
+            ));
+        }
+        tracker_model::cholesky_checked(&self.measurement_noise, "measurement_noise")?;
+        let weights = &self.move_weights.0;
+        if weights.iter().any(|w| !(w.is_finite() && *w >= 0.0)) || weights[0] <= 0.0 {
+            return Err(invalid_parameter(
+                "move_weights",
+                format!("{weights:?} must be finite and ≥ 0, with birth > 0"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The variance of each velocity component of a track started from one measurement:
+    /// the configured one (checked), or v̄²/3 when unset ([`TrackInit::FirstMeasurement`]);
+    /// 0 for the two-point start (whose covariance is checked positive semi-definite).
+    fn initial_velocity_variance(&self) -> Result<f64> {
+        Ok(match self.track_init {
+            TrackInit::FirstMeasurement {
+                velocity_variance: Some(v),
+            } => {
+                ensure_positive(v, "velocity_variance")?;
+                v
+            }
+            TrackInit::FirstMeasurement {
+                velocity_variance: None,
+            } => self.max_speed * self.max_speed / 3.0,
+            TrackInit::TwoPoint { initial_covariance } => {
+                check_positive_semidefinite(&initial_covariance, "initial_covariance")?;
+                0.0
+            }
+        })
+    }
+
+    /// ζ(d), the distribution of the gap d = 1..=d̄ between consecutive detections of a track
+    /// (geometric in p_d, truncated at d̄ and renormalised, or uniform; Oh, Russell & Sastry
+    /// 2009), and its cumulative sums.
+    fn zeta_table(&self) -> (Vec<f64>, Vec<f64>) {
+        let d_bar = self.max_gap as usize;
+        let raw: Vec<f64> = (0..d_bar)
+            .map(|i| match self.gap_distribution {
+                GapDistribution::Geometric => self.p_detect * (1.0 - self.p_detect).powi(i as i32),
+                GapDistribution::Uniform => 1.0,
+            })
+            .collect();
+        let total: f64 = raw.iter().sum();
+        let zeta: Vec<f64> = raw.iter().map(|z| z / total).collect();
+        let mut zeta_cdf = Vec::with_capacity(d_bar);
+        let mut acc = 0.0;
+        for z in &zeta {
+            acc += z;
+            zeta_cdf.push(acc);
+        }
+        (zeta, zeta_cdf)
+    }
+
+    /// Whether nothing couples the x and y axes — R, every Q(d) in `process_noise` and the
+    /// two-point start covariance have zero x–y entries — so that the Kalman filter factors
+    /// into one filter per axis.
+    fn axes_decoupled(&self, process_noise: &[Matrix4<f64>]) -> bool {
+        // x–y entries of a 4 × 4 covariance ordered [x, y, vx, vy].
+        let uncoupled4 = |m: &Matrix4<f64>| {
+            [(0, 1), (0, 3), (1, 2), (2, 3)]
+                .iter()
+                .all(|&(i, j)| m[(i, j)] == 0.0 && m[(j, i)] == 0.0)
+        };
+        let r = &self.measurement_noise;
+        r[(0, 1)] == 0.0
+            && r[(1, 0)] == 0.0
+            && process_noise.iter().all(uncoupled4)
+            && match self.track_init {
+                TrackInit::FirstMeasurement { .. } => true,
+                TrackInit::TwoPoint { initial_covariance } => uncoupled4(&initial_covariance),
+            }
     }
 }
 

@@ -164,39 +164,105 @@ pub fn nearest_neighbour_tracks(
     let max_gap = config
         .max_gap
         .map_or(problem.max_gap(), |g| (g as usize).min(problem.max_gap()));
-    // ln[p_d / ((1 − p_d) λ)], λ = (λ_f + λ_b) / V: the constant part of −c_kj.
+    let log_ratio = log_ratio(model, config);
+    let mut live: Vec<Live> = Vec::new();
+    let mut done: Vec<Vec<MeasId>> = Vec::new();
+    let mut pairs: Vec<Pair> = Vec::new();
+    for (t, scan) in problem.nonempty_scans(lo..=hi) {
+        live = retire(live, t, problem, max_gap, config, &mut done);
+        pairs.clear();
+        let gating = Gating {
+            model,
+            problem,
+            log_ratio,
+            config,
+        };
+        gating.pairs(&live, t, scan, &mut pairs);
+        let chosen = match (config.assignment, config.cost) {
+            (Assignment::Greedy, _) => greedy(&mut pairs, live.len(), scan.len()),
+            (Assignment::Optimal, AssignmentCost::Forced) => {
+                optimal(&pairs, live.len(), scan.len(), false)?
+            }
+            (Assignment::Optimal, AssignmentCost::LogLikelihoodRatio) => {
+                optimal(&pairs, live.len(), scan.len(), true)?
+            }
+        };
+        extend(&mut live, &pairs, &chosen, t, scan);
+    }
+    // The window's end: every confirmed track still alive is finished.
+    done.extend(
+        live.into_iter()
+            .filter(|t| confirmed(t, config))
+            .map(|t| t.meas),
+    );
+    done.sort_unstable();
+    Ok(done)
+}
+
+/// A gated (track, measurement) pair: (cost, track index, measurement index in the scan,
+/// the track's filtered state after the measurement).
+type Pair = (f64, usize, usize, Node);
+
+/// ln[p_d / ((1 − p_d) λ)], λ = (λ_f + λ_b) / V: the constant part of −c_kj (Blackman
+/// 2004's track-score increment, module docs); 0 for the forced assignment.
+fn log_ratio(model: &Model, config: &NearestNeighbourConfig) -> f64 {
     let cfg = model.config();
-    let log_ratio = match config.cost {
+    match config.cost {
         AssignmentCost::Forced => 0.0,
         AssignmentCost::LogLikelihoodRatio => {
             let density = (cfg.clutter_per_scan + cfg.births_per_scan) / cfg.volume;
             cfg.p_detect.ln() - (-cfg.p_detect).ln_1p() - density.ln()
         }
-    };
-    let confirmed = |track: &Live| track.meas.len() as u32 >= config.confirm_hits;
-    let mut live: Vec<Live> = Vec::new();
-    let mut done: Vec<Vec<MeasId>> = Vec::new();
-    let mut pairs: Vec<(f64, usize, usize, Node)> = Vec::new();
-    for (t, scan) in problem.nonempty_scans(lo..=hi) {
-        // Before this scan: end tracks that can no longer grow (the gap would exceed the
-        // deletion gap) and drop those that failed M-of-N (their first N scans are over).
-        let mut kept = Vec::with_capacity(live.len());
-        for track in live.drain(..) {
-            let failed = (t - track.first_scan) as u64 >= u64::from(config.confirm_window)
-                && !confirmed(&track);
-            if failed {
-                continue;
-            }
-            if t - problem.scan_of(track.last()) > max_gap {
-                if confirmed(&track) {
-                    done.push(track.meas);
-                }
-            } else {
-                kept.push(track);
-            }
+    }
+}
+
+/// Whether a track has its M (`confirm_hits`) measurements.
+fn confirmed(track: &Live, config: &NearestNeighbourConfig) -> bool {
+    track.meas.len() as u32 >= config.confirm_hits
+}
+
+/// Before scan `t`: ends the tracks that can no longer grow (the gap would exceed the
+/// deletion gap; the confirmed ones go to `done`) and drops those that failed M-of-N (their
+/// first N scans are over). Returns the tracks kept, in order.
+fn retire(
+    live: Vec<Live>,
+    t: usize,
+    problem: &Problem,
+    max_gap: usize,
+    config: &NearestNeighbourConfig,
+    done: &mut Vec<Vec<MeasId>>,
+) -> Vec<Live> {
+    let mut kept = Vec::with_capacity(live.len());
+    for track in live {
+        let failed = (t - track.first_scan) as u64 >= u64::from(config.confirm_window)
+            && !confirmed(&track, config);
+        if failed {
+            continue;
         }
-        live = kept;
-        pairs.clear();
+        if t - problem.scan_of(track.last()) > max_gap {
+            if confirmed(&track, config) {
+                done.push(track.meas);
+            }
+        } else {
+            kept.push(track);
+        }
+    }
+    kept
+}
+
+/// What gating a scan against the live tracks needs.
+struct Gating<'a> {
+    model: &'a Model,
+    problem: &'a Problem,
+    log_ratio: f64,
+    config: &'a NearestNeighbourConfig,
+}
+
+impl Gating<'_> {
+    /// The gated pairs of scan `t` (into `pairs`, by track then measurement): allowed in Ω,
+    /// inside the χ² gate, and (log-likelihood-ratio costs) of negative cost.
+    fn pairs(&self, live: &[Live], t: usize, scan: &[MeasId], pairs: &mut Vec<Pair>) {
+        let (model, problem, config) = (self.model, self.problem, self.config);
         for (k, track) in live.iter().enumerate() {
             let last = track.last();
             let gap = t - problem.scan_of(last);
@@ -217,44 +283,38 @@ pub fn nearest_neighbour_tracks(
                         AssignmentCost::Forced => 0.0,
                         AssignmentCost::LogLikelihoodRatio => problem.log_score_ratio(m),
                     };
-                    let cost =
-                        node.cum_log_likelihood() - next.cum_log_likelihood() - log_ratio - score;
+                    let cost = node.cum_log_likelihood()
+                        - next.cum_log_likelihood()
+                        - self.log_ratio
+                        - score;
                     if config.cost == AssignmentCost::Forced || cost < 0.0 {
                         pairs.push((cost, k, j, next));
                     }
                 }
             }
         }
-        let chosen = match (config.assignment, config.cost) {
-            (Assignment::Greedy, _) => greedy(&mut pairs, live.len(), scan.len()),
-            (Assignment::Optimal, AssignmentCost::Forced) => {
-                optimal(&pairs, live.len(), scan.len(), false)?
-            }
-            (Assignment::Optimal, AssignmentCost::LogLikelihoodRatio) => {
-                optimal(&pairs, live.len(), scan.len(), true)?
-            }
-        };
-        let mut used = vec![false; scan.len()];
-        for &p in &chosen {
-            let (_, k, j, next) = pairs[p];
-            used[j] = true;
-            live[k].meas.push(scan[j]);
-            live[k].node = Some(next);
-        }
-        for (j, &m) in scan.iter().enumerate() {
-            if !used[j] {
-                live.push(Live {
-                    meas: vec![m],
-                    node: None,
-                    first_scan: t,
-                });
-            }
+    }
+}
+
+/// Applies the chosen pairs (each track takes its measurement and filtered state) and starts
+/// a tentative track at scan `t` on every measurement left unused.
+fn extend(live: &mut Vec<Live>, pairs: &[Pair], chosen: &[usize], t: usize, scan: &[MeasId]) {
+    let mut used = vec![false; scan.len()];
+    for &p in chosen {
+        let (_, k, j, next) = pairs[p];
+        used[j] = true;
+        live[k].meas.push(scan[j]);
+        live[k].node = Some(next);
+    }
+    for (j, &m) in scan.iter().enumerate() {
+        if !used[j] {
+            live.push(Live {
+                meas: vec![m],
+                node: None,
+                first_scan: t,
+            });
         }
     }
-    // The window's end: every confirmed track still alive is finished.
-    done.extend(live.into_iter().filter(confirmed).map(|t| t.meas));
-    done.sort_unstable();
-    Ok(done)
 }
 
 /// Cheapest pairs first, each track and measurement used once.

@@ -354,6 +354,38 @@ impl std::fmt::Debug for Beamformer {
 impl BeamformConfig {
     /// Checks the parameters against `array` and precomputes filters and steering tables.
     pub fn check(&self, array: &MicArray) -> Result<Beamformer> {
+        let fs = self.check_common()?;
+        let n_mics = array.n_mics();
+        // advances[b·M + m] in samples.
+        let advances: Vec<f64> = (0..self.n_beams)
+            .flat_map(|b| {
+                array.arrival_advances_s(TAU * b as f64 / self.n_beams as f64, self.sound_speed_mps)
+            })
+            .map(|t| t * fs)
+            .collect();
+        // The largest inter-microphone delay must fit in a frame with room to spare.
+        let spread = (array.aperture_m() / self.sound_speed_mps * fs).ceil() as usize;
+        let engine = match self.method {
+            Method::TimeDomain => Engine::Time(self.time_domain(&advances, spread, n_mics, fs)?),
+            Method::FrequencyDomain | Method::Mvdr => {
+                let freq = self.freq_domain(&advances, spread, n_mics, fs)?;
+                if self.method == Method::Mvdr {
+                    Engine::Mvdr(self.mvdr(freq, n_mics)?)
+                } else {
+                    Engine::Freq(freq)
+                }
+            }
+        };
+        Ok(Beamformer {
+            config: self.clone(),
+            n_mics,
+            engine,
+        })
+    }
+
+    /// Checks what every method needs (sample rate, beams, hop, sound speed, band) and returns
+    /// the sample rate in hertz.
+    fn check_common(&self) -> Result<f64> {
         if self.sample_rate_hz == 0 {
             return Err(Error::ZeroSampleRate);
         }
@@ -383,148 +415,151 @@ impl BeamformConfig {
             }
             .into());
         }
-        let n_mics = array.n_mics();
-        // advances[b·M + m] in samples.
-        let advances: Vec<f64> = (0..self.n_beams)
-            .flat_map(|b| {
-                array.arrival_advances_s(TAU * b as f64 / self.n_beams as f64, self.sound_speed_mps)
-            })
-            .map(|t| t * fs)
-            .collect();
+        Ok(fs)
+    }
+
+    /// The time-domain delay-and-sum engine (Kushwaha et al. 2008): the band-pass FIR and,
+    /// per (beam, microphone), the windowed-sinc fractional-delay taps that delay the channel
+    /// by its advance (`advances` in samples), after checking that the frame holds the FIR,
+    /// the delays and the array's `spread`.
+    fn time_domain(
+        &self,
+        advances: &[f64],
+        spread: usize,
+        n_mics: usize,
+        fs: f64,
+    ) -> Result<TimeDomain> {
+        let [lo, hi] = self.band_hz;
         let max_adv = advances.iter().fold(0.0_f64, |m, a| m.max(a.abs()));
-        // The largest inter-microphone delay must fit in a frame with room to spare.
-        let spread = (array.aperture_m() / self.sound_speed_mps * fs).ceil() as usize;
-        let engine = match self.method {
-            Method::TimeDomain => {
-                if self.weighting == Weighting::Phat {
-                    return Err(Error::Unsupported(
-                        "PHAT weighting needs the frequency-domain beamformer".into(),
-                    ));
-                }
-                if self.fir_taps.is_multiple_of(2) {
-                    return Err(ModelError::InvalidParameter {
-                        name: "fir_taps",
-                        reason: format!(
-                            "{} must be odd (a linear-phase FIR with an integer delay)",
-                            self.fir_taps
-                        ),
-                    }
-                    .into());
-                }
-                let half = self.interp_half_width;
-                if half == 0 {
-                    return Err(ModelError::InvalidParameter {
-                        name: "interp_half_width",
-                        reason: "must be at least 1".into(),
-                    }
-                    .into());
-                }
-                let margin = max_adv.ceil() as usize + half;
-                let required = self.fir_taps + 2 * margin + spread.max(1);
-                if self.frame_len < required {
-                    return Err(Error::FrameTooShort {
-                        frame_len: self.frame_len,
-                        required,
-                    });
-                }
-                let n_filtered = self.frame_len - self.fir_taps + 1;
-                let n_out = n_filtered - 2 * margin;
-                let mut taps = vec![0.0_f32; advances.len() * 2 * half];
-                let mut starts = Vec::with_capacity(advances.len());
-                let mut buf = vec![0.0; 2 * half];
-                for (k, a) in advances.iter().enumerate() {
-                    // Output n reads filtered position n + margin − a (a delay by the advance).
-                    let pos = margin as f64 - a;
-                    let i0 = pos.floor();
-                    fractional_taps(pos - i0, half, &mut buf);
-                    starts.push(i0 as usize + 1 - half);
-                    for (t, b) in taps[k * 2 * half..(k + 1) * 2 * half].iter_mut().zip(&buf) {
-                        *t = *b as f32;
-                    }
-                }
-                Engine::Time(TimeDomain {
-                    fir: bandpass_fir(self.fir_taps, lo, hi, fs)
-                        .into_iter()
-                        .map(|v| v as f32)
-                        .collect(),
-                    taps,
-                    starts,
-                    n_taps: 2 * half,
-                    n_out,
-                    filtered: vec![vec![0.0; n_filtered]; n_mics],
-                    beam: vec![0.0; n_out],
-                })
+        if self.weighting == Weighting::Phat {
+            return Err(Error::Unsupported(
+                "PHAT weighting needs the frequency-domain beamformer".into(),
+            ));
+        }
+        if self.fir_taps.is_multiple_of(2) {
+            return Err(ModelError::InvalidParameter {
+                name: "fir_taps",
+                reason: format!(
+                    "{} must be odd (a linear-phase FIR with an integer delay)",
+                    self.fir_taps
+                ),
             }
-            Method::FrequencyDomain | Method::Mvdr => {
-                let required = 2 * spread + 2;
-                if self.frame_len < required {
-                    return Err(Error::FrameTooShort {
-                        frame_len: self.frame_len,
-                        required,
-                    });
-                }
-                let l = self.frame_len;
-                let fft = RealFftPlanner::<f64>::new().plan_fft_forward(l);
-                let window: Vec<f64> = match self.window {
-                    Window::Rectangular => vec![1.0; l],
-                    // Periodic Hann.
-                    Window::Hann => (0..l)
-                        .map(|i| 0.5 - 0.5 * (TAU * i as f64 / l as f64).cos())
-                        .collect(),
-                };
-                let w2: f64 = window.iter().map(|w| w * w).sum();
-                let df = fs / l as f64;
-                let first_bin = (lo / df).ceil() as usize;
-                let last_bin = ((hi / df).floor() as usize).min(l / 2);
-                if last_bin < first_bin {
-                    return Err(ModelError::InvalidParameter {
-                        name: "band_hz",
-                        reason: format!(
-                            "[{lo}, {hi}] contains no FFT bin of a {l}-sample frame ({df} Hz apart)"
-                        ),
-                    }
-                    .into());
-                }
-                let n_bins = last_bin - first_bin + 1;
-                let mut steer = Vec::with_capacity(self.n_beams * n_bins * n_mics);
-                for b in 0..self.n_beams {
-                    for k in first_bin..=last_bin {
-                        for m in 0..n_mics {
-                            let phase = -TAU * k as f64 / l as f64 * advances[b * n_mics + m];
-                            steer.push(Complex::from_polar(1.0, phase));
-                        }
-                    }
-                }
-                let bin_weight = (first_bin..=last_bin)
-                    .map(|k| {
-                        let edge = k == 0 || (l.is_multiple_of(2) && k == l / 2);
-                        (if edge { 1.0 } else { 2.0 }) / (l as f64 * w2)
-                    })
-                    .collect();
-                let freq = FreqDomain {
-                    input: fft.make_input_vec(),
-                    spectrum: fft.make_output_vec(),
-                    scratch: fft.make_scratch_vec(),
-                    fft,
-                    window,
-                    first_bin,
-                    n_bins,
-                    steer,
-                    bin_weight,
-                    band: vec![Complex::new(0.0, 0.0); n_bins * n_mics],
-                    phat: self.weighting == Weighting::Phat,
-                };
-                if self.method == Method::Mvdr {
-                    Engine::Mvdr(self.mvdr(freq, n_mics)?)
-                } else {
-                    Engine::Freq(freq)
-                }
+            .into());
+        }
+        let half = self.interp_half_width;
+        if half == 0 {
+            return Err(ModelError::InvalidParameter {
+                name: "interp_half_width",
+                reason: "must be at least 1".into(),
             }
+            .into());
+        }
+        let margin = max_adv.ceil() as usize + half;
+        let required = self.fir_taps + 2 * margin + spread.max(1);
+        if self.frame_len < required {
+            return Err(Error::FrameTooShort {
+                frame_len: self.frame_len,
+                required,
+            });
+        }
+        let n_filtered = self.frame_len - self.fir_taps + 1;
+        let n_out = n_filtered - 2 * margin;
+        let mut taps = vec![0.0_f32; advances.len() * 2 * half];
+        let mut starts = Vec::with_capacity(advances.len());
+        let mut buf = vec![0.0; 2 * half];
+        for (k, a) in advances.iter().enumerate() {
+            // Output n reads filtered position n + margin − a (a delay by the advance).
+            let pos = margin as f64 - a;
+            let i0 = pos.floor();
+            fractional_taps(pos - i0, half, &mut buf);
+            starts.push(i0 as usize + 1 - half);
+            for (t, b) in taps[k * 2 * half..(k + 1) * 2 * half].iter_mut().zip(&buf) {
+                *t = *b as f32;
+            }
+        }
+        Ok(TimeDomain {
+            fir: bandpass_fir(self.fir_taps, lo, hi, fs)
+                .into_iter()
+                .map(|v| v as f32)
+                .collect(),
+            taps,
+            starts,
+            n_taps: 2 * half,
+            n_out,
+            filtered: vec![vec![0.0; n_filtered]; n_mics],
+            beam: vec![0.0; n_out],
+        })
+    }
+
+    /// The frequency-domain engine (steered response power over the FFT bins in the band,
+    /// Kushwaha et al. 2008; PHAT-weighted on request): the FFT plan, the window, the bins of
+    /// the band, the steering phases e^{−j2πf_kτ_{m,b}} and the Parseval weights, after
+    /// checking that the frame holds twice the array's `spread` and that the band holds a bin.
+    fn freq_domain(
+        &self,
+        advances: &[f64],
+        spread: usize,
+        n_mics: usize,
+        fs: f64,
+    ) -> Result<FreqDomain> {
+        let [lo, hi] = self.band_hz;
+        let required = 2 * spread + 2;
+        if self.frame_len < required {
+            return Err(Error::FrameTooShort {
+                frame_len: self.frame_len,
+                required,
+            });
+        }
+        let l = self.frame_len;
+        let fft = RealFftPlanner::<f64>::new().plan_fft_forward(l);
+        let window: Vec<f64> = match self.window {
+            Window::Rectangular => vec![1.0; l],
+            // Periodic Hann.
+            Window::Hann => (0..l)
+                .map(|i| 0.5 - 0.5 * (TAU * i as f64 / l as f64).cos())
+                .collect(),
         };
-        Ok(Beamformer {
-            config: self.clone(),
-            n_mics,
-            engine,
+        let w2: f64 = window.iter().map(|w| w * w).sum();
+        let df = fs / l as f64;
+        let first_bin = (lo / df).ceil() as usize;
+        let last_bin = ((hi / df).floor() as usize).min(l / 2);
+        if last_bin < first_bin {
+            return Err(ModelError::InvalidParameter {
+                name: "band_hz",
+                reason: format!(
+                    "[{lo}, {hi}] contains no FFT bin of a {l}-sample frame ({df} Hz apart)"
+                ),
+            }
+            .into());
+        }
+        let n_bins = last_bin - first_bin + 1;
+        let mut steer = Vec::with_capacity(self.n_beams * n_bins * n_mics);
+        for b in 0..self.n_beams {
+            for k in first_bin..=last_bin {
+                for m in 0..n_mics {
+                    let phase = -TAU * k as f64 / l as f64 * advances[b * n_mics + m];
+                    steer.push(Complex::from_polar(1.0, phase));
+                }
+            }
+        }
+        let bin_weight = (first_bin..=last_bin)
+            .map(|k| {
+                let edge = k == 0 || (l.is_multiple_of(2) && k == l / 2);
+                (if edge { 1.0 } else { 2.0 }) / (l as f64 * w2)
+            })
+            .collect();
+        Ok(FreqDomain {
+            input: fft.make_input_vec(),
+            spectrum: fft.make_output_vec(),
+            scratch: fft.make_scratch_vec(),
+            fft,
+            window,
+            first_bin,
+            n_bins,
+            steer,
+            bin_weight,
+            band: vec![Complex::new(0.0, 0.0); n_bins * n_mics],
+            phat: self.weighting == Weighting::Phat,
         })
     }
 

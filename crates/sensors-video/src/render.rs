@@ -282,40 +282,7 @@ impl Scene {
         let t = k as f64 * cfg.frame_period_s;
         let gain = 1.0 + cfg.drift_amplitude * (TAU * t / cfg.drift_period_s).sin();
         let c = cam.position_m;
-        // Objects present now: base point, camera-facing plane normal n and lateral t.
-        struct Live {
-            idx: usize,
-            p: [f64; 2],
-            n: [f64; 2],
-            lat: [f64; 2],
-            half_w: f64,
-            height: f64,
-            colour: [f64; 3],
-        }
-        let live: Vec<Live> = self
-            .objects
-            .iter()
-            .enumerate()
-            .filter(|(_, o)| t >= o.appear_s && t < o.vanish_s)
-            .map(|(idx, o)| {
-                let p = [
-                    o.start_m[0] + o.velocity_mps[0] * t,
-                    o.start_m[1] + o.velocity_mps[1] * t,
-                ];
-                let b = (p[1] - c[1]).atan2(p[0] - c[0]);
-                let (sb, cb) = b.sin_cos();
-                let (ow, oh) = o.kind.size_m();
-                Live {
-                    idx,
-                    p,
-                    n: [cb, sb],
-                    lat: [-sb, cb],
-                    half_w: ow / 2.0,
-                    height: oh,
-                    colour: o.colour.map(f64::from),
-                }
-            })
-            .collect();
+        let live = self.live_objects(t);
         let bearings_rad = live
             .iter()
             .map(|o| (o.idx, (o.p[1] - c[1]).atan2(o.p[0] - c[0])))
@@ -328,60 +295,16 @@ impl Scene {
         let mut shadow = vec![false; w * h];
         let mut owner = vec![usize::MAX; w * h];
         for i in 0..w * h {
-            let d = self.rays[i];
-            // Nearest object surface along the ray.
-            let mut best: Option<(f64, [f64; 3])> = None;
-            for o in &live {
-                let dn = d[0] * o.n[0] + d[1] * o.n[1];
-                if dn <= 1e-9 {
-                    continue;
-                }
-                let s = ((o.p[0] - c[0]) * o.n[0] + (o.p[1] - c[1]) * o.n[1]) / dn;
-                let hp = [c[0] + s * d[0], c[1] + s * d[1], c[2] + s * d[2]];
-                let lat = (hp[0] - o.p[0]) * o.lat[0] + (hp[1] - o.p[1]) * o.lat[1];
-                if s > 0.0
-                    && lat.abs() <= o.half_w
-                    && hp[2] >= 0.0
-                    && hp[2] <= o.height
-                    && best.is_none_or(|(bs, _)| s < bs)
-                {
-                    // Cylinder shading across the body, lighter towards the top.
-                    let across = lat / o.half_w;
-                    let shade = (0.55 + 0.45 * (1.0 - across * across).sqrt())
-                        * (0.8 + 0.3 * hp[2] / o.height);
-                    best = Some((s, o.colour.map(|v| v * shade)));
-                    owner[i] = o.idx;
-                }
-            }
-            let col = if let Some((_, col)) = best {
+            let col = if let Some((idx, col)) = self.nearest_surface(i, &live) {
+                owner[i] = idx;
                 truth[i] = true;
                 col
             } else {
-                let (u, v) = (i % w, i / w);
-                let mut col = self.base[i];
-                for p in &self.patches {
-                    if u >= p.u0 && u < p.u0 + p.w && v >= p.v0 && v < p.v0 + p.h {
-                        let s = sway * (1.0 - (v - p.v0) as f64 / p.h as f64) + p.phase;
-                        let n = p.noise.sample((u as f64 + s) / 2.0, v as f64 / 2.0);
-                        let g = 0.5 + 1.0 * n;
-                        col = [60.0 * g, 110.0 * g, 50.0 * g];
-                    }
-                }
+                let mut col = self.background(i, sway);
                 let g = self.ground[i];
-                if g[0].is_finite() {
-                    let in_shadow = live.iter().any(|o| {
-                        // Distance from g to the shadow axis segment p → p − L·sun.
-                        let len = o.height * shadow_len;
-                        let (ax, ay) = (-ca, -sa);
-                        let (qx, qy) = (g[0] - o.p[0], g[1] - o.p[1]);
-                        let along = (qx * ax + qy * ay).clamp(0.0, len);
-                        let (ex, ey) = (qx - along * ax, qy - along * ay);
-                        ex * ex + ey * ey <= o.half_w * o.half_w
-                    });
-                    if in_shadow {
-                        shadow[i] = true;
-                        col = col.map(|v| v * cfg.shadow_factor);
-                    }
+                if g[0].is_finite() && in_shadow(g, &live, (sa, ca), shadow_len) {
+                    shadow[i] = true;
+                    col = col.map(|v| v * cfg.shadow_factor);
                 }
                 col
             };
@@ -389,29 +312,7 @@ impl Scene {
                 rgb[i * 3 + ch] = col[ch] * gain;
             }
         }
-        // Glints: Poisson-like count from independent halves of the rate, saturated discs.
-        let n_glints = {
-            let whole = cfg.glints_per_frame.floor() as usize;
-            whole + usize::from(rng.random::<f64>() < cfg.glints_per_frame.fract())
-        };
-        for _ in 0..n_glints {
-            let (gu, gv) = (rng.random_range(0..w) as i64, rng.random_range(0..h) as i64);
-            let r: i64 = rng.random_range(1..=2);
-            for dv in -r..=r {
-                for du in -r..=r {
-                    let (u, v) = (gu + du, gv + dv);
-                    if du * du + dv * dv <= r * r
-                        && u >= 0
-                        && v >= 0
-                        && (u as usize) < w
-                        && (v as usize) < h
-                    {
-                        let i = v as usize * w + u as usize;
-                        rgb[i * 3..i * 3 + 3].fill(255.0);
-                    }
-                }
-            }
-        }
+        add_glints(&mut rgb, w, h, cfg.glints_per_frame, rng);
         let noise = Normal::new(0.0, cfg.noise_sigma.max(1e-12)).map_err(|e| {
             tracker_model::Error::InvalidParameter {
                 name: "noise_sigma",
@@ -433,28 +334,7 @@ impl Scene {
         if cfg.format == PixelFormat::Grey {
             frame = frame.to_grey();
         }
-        let mut boxes: Vec<(usize, BoundingBox)> = Vec::new();
-        for o in &live {
-            let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
-            for (i, _) in owner.iter().enumerate().filter(|(_, ow)| **ow == o.idx) {
-                let (u, v) = (i % w, i / w);
-                x0 = x0.min(u);
-                y0 = y0.min(v);
-                x1 = x1.max(u);
-                y1 = y1.max(v);
-            }
-            if x0 != usize::MAX {
-                boxes.push((
-                    o.idx,
-                    BoundingBox {
-                        left: x0 as f64,
-                        top: y0 as f64,
-                        width: (x1 - x0 + 1) as f64,
-                        height: (y1 - y0 + 1) as f64,
-                    },
-                ));
-            }
-        }
+        let boxes = object_boxes(&live, &owner, w);
         Ok(RenderedFrame {
             frame,
             truth,
@@ -463,4 +343,164 @@ impl Scene {
             bearings_rad,
         })
     }
+
+    /// The objects present at time `t`: base point, camera-facing plane normal and lateral.
+    fn live_objects(&self, t: f64) -> Vec<Live> {
+        let c = self.config.camera.position_m;
+        self.objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| t >= o.appear_s && t < o.vanish_s)
+            .map(|(idx, o)| {
+                let p = [
+                    o.start_m[0] + o.velocity_mps[0] * t,
+                    o.start_m[1] + o.velocity_mps[1] * t,
+                ];
+                let b = (p[1] - c[1]).atan2(p[0] - c[0]);
+                let (sb, cb) = b.sin_cos();
+                let (ow, oh) = o.kind.size_m();
+                Live {
+                    idx,
+                    p,
+                    n: [cb, sb],
+                    lat: [-sb, cb],
+                    half_w: ow / 2.0,
+                    height: oh,
+                    colour: o.colour.map(f64::from),
+                }
+            })
+            .collect()
+    }
+
+    /// The nearest object surface along pixel `i`'s ray (ray casting against each object's
+    /// camera-facing billboard), as (object index, shaded colour): cylinder shading across
+    /// the body, lighter towards the top. `None` when the ray meets no object.
+    fn nearest_surface(&self, i: usize, live: &[Live]) -> Option<(usize, [f64; 3])> {
+        let c = self.config.camera.position_m;
+        let d = self.rays[i];
+        let mut best: Option<(f64, [f64; 3])> = None;
+        let mut owner = usize::MAX;
+        for o in live {
+            let dn = d[0] * o.n[0] + d[1] * o.n[1];
+            if dn <= 1e-9 {
+                continue;
+            }
+            let s = ((o.p[0] - c[0]) * o.n[0] + (o.p[1] - c[1]) * o.n[1]) / dn;
+            let hp = [c[0] + s * d[0], c[1] + s * d[1], c[2] + s * d[2]];
+            let lat = (hp[0] - o.p[0]) * o.lat[0] + (hp[1] - o.p[1]) * o.lat[1];
+            if s > 0.0
+                && lat.abs() <= o.half_w
+                && hp[2] >= 0.0
+                && hp[2] <= o.height
+                && best.is_none_or(|(bs, _)| s < bs)
+            {
+                // Cylinder shading across the body, lighter towards the top.
+                let across = lat / o.half_w;
+                let shade =
+                    (0.55 + 0.45 * (1.0 - across * across).sqrt()) * (0.8 + 0.3 * hp[2] / o.height);
+                best = Some((s, o.colour.map(|v| v * shade)));
+                owner = o.idx;
+            }
+        }
+        best.map(|(_, col)| (owner, col))
+    }
+
+    /// The lit background of pixel `i` before drift: the ground or façade texture, or a
+    /// swaying clutter patch (value noise shifted by `sway`, less towards the patch's foot).
+    fn background(&self, i: usize, sway: f64) -> [f64; 3] {
+        let w = self.config.camera.width;
+        let (u, v) = (i % w, i / w);
+        let mut col = self.base[i];
+        for p in &self.patches {
+            if u >= p.u0 && u < p.u0 + p.w && v >= p.v0 && v < p.v0 + p.h {
+                let s = sway * (1.0 - (v - p.v0) as f64 / p.h as f64) + p.phase;
+                let n = p.noise.sample((u as f64 + s) / 2.0, v as f64 / 2.0);
+                let g = 0.5 + 1.0 * n;
+                col = [60.0 * g, 110.0 * g, 50.0 * g];
+            }
+        }
+        col
+    }
+}
+
+/// An object present in a frame: base point, camera-facing plane normal `n` and lateral
+/// `lat`, half width, height and colour.
+struct Live {
+    idx: usize,
+    p: [f64; 2],
+    n: [f64; 2],
+    lat: [f64; 2],
+    half_w: f64,
+    height: f64,
+    colour: [f64; 3],
+}
+
+/// Whether ground point `g` lies in a cast shadow: its distance to some object's shadow axis
+/// segment p → p − L·sun (L = height / tan(elevation); `sun` = (sin, cos) of the azimuth) is
+/// at most the object's radius.
+fn in_shadow(g: [f64; 2], live: &[Live], sun: (f64, f64), shadow_len: f64) -> bool {
+    let (sa, ca) = sun;
+    live.iter().any(|o| {
+        // Distance from g to the shadow axis segment p → p − L·sun.
+        let len = o.height * shadow_len;
+        let (ax, ay) = (-ca, -sa);
+        let (qx, qy) = (g[0] - o.p[0], g[1] - o.p[1]);
+        let along = (qx * ax + qy * ay).clamp(0.0, len);
+        let (ex, ey) = (qx - along * ax, qy - along * ay);
+        ex * ex + ey * ey <= o.half_w * o.half_w
+    })
+}
+
+/// Glints: a count of ⌊rate⌋ plus one with probability frac(rate), each a saturated disc of
+/// radius 1–2 px at a uniform position, drawn from `rng` (count, then per glint u, v, r).
+fn add_glints(rgb: &mut [f64], w: usize, h: usize, rate: f64, rng: &mut impl Rng) {
+    let n_glints = {
+        let whole = rate.floor() as usize;
+        whole + usize::from(rng.random::<f64>() < rate.fract())
+    };
+    for _ in 0..n_glints {
+        let (gu, gv) = (rng.random_range(0..w) as i64, rng.random_range(0..h) as i64);
+        let r: i64 = rng.random_range(1..=2);
+        for dv in -r..=r {
+            for du in -r..=r {
+                let (u, v) = (gu + du, gv + dv);
+                if du * du + dv * dv <= r * r
+                    && u >= 0
+                    && v >= 0
+                    && (u as usize) < w
+                    && (v as usize) < h
+                {
+                    let i = v as usize * w + u as usize;
+                    rgb[i * 3..i * 3 + 3].fill(255.0);
+                }
+            }
+        }
+    }
+}
+
+/// Per visible object (index, box of the pixels it owns), in `live` order.
+fn object_boxes(live: &[Live], owner: &[usize], w: usize) -> Vec<(usize, BoundingBox)> {
+    let mut boxes: Vec<(usize, BoundingBox)> = Vec::new();
+    for o in live {
+        let (mut x0, mut y0, mut x1, mut y1) = (usize::MAX, usize::MAX, 0, 0);
+        for (i, _) in owner.iter().enumerate().filter(|(_, ow)| **ow == o.idx) {
+            let (u, v) = (i % w, i / w);
+            x0 = x0.min(u);
+            y0 = y0.min(v);
+            x1 = x1.max(u);
+            y1 = y1.max(v);
+        }
+        if x0 != usize::MAX {
+            boxes.push((
+                o.idx,
+                BoundingBox {
+                    left: x0 as f64,
+                    top: y0 as f64,
+                    width: (x1 - x0 + 1) as f64,
+                    height: (y1 - y0 + 1) as f64,
+                },
+            ));
+        }
+    }
+    boxes
 }
