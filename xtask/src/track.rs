@@ -1,5 +1,5 @@
 //! `cargo xtask track --tracker mcmcda|gnn|phd --input DETS.txt --out TRACKS.txt`: reads
-//! MOTChallenge detections and an optional configuration, runs `scenarios::track` and writes
+//! MOTChallenge detections and an optional configuration, runs `mot::track` and writes
 //! MOTChallenge tracks. `--print-config` prints the effective configuration instead.
 
 use std::fs;

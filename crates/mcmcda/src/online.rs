@@ -508,34 +508,38 @@ impl OnlineTracker {
         self.finish_in_place()
     }
 
-    /// [`Self::finish`] on a borrowed tracker, which is left without measurements (its
-    /// problem empty, nothing committed): stepping it again starts a new run with the old
-    /// labels retired.
+    /// [`Self::finish`] on a borrowed tracker, which is spent afterwards: its measurements and
+    /// associations are handed out (its problem left empty), and a failed smoothing leaves it
+    /// as it was.
     pub(crate) fn finish_in_place(&mut self) -> Result<OnlineResult> {
         if let Ok(all) = self.problem.all_scans()
             && self.open_from <= *all.end()
         {
             self.commit(self.open_from..=*all.end());
         }
-        let first = self.problem.first_frame();
-        let problem = std::mem::replace(&mut self.problem, Problem::empty(&self.model, first));
-        let committed = std::mem::take(&mut self.committed);
-        let released = std::mem::take(&mut self.released);
-        self.map.clear();
-        self.open_from = 0;
         let mut tracks = TrackSet::new();
         let mut associations = Vec::new();
-        for (label, meas) in committed {
-            let released = released.get(&label).copied().unwrap_or(0);
+        for (&label, meas) in &self.committed {
+            let released = self.released.get(&label).copied().unwrap_or(0);
             if meas.is_empty() || released + meas.len() < 2 {
                 continue;
             }
-            let one = smoothed_tracks(&self.model, &problem, std::slice::from_ref(&meas), label)?;
+            let one = smoothed_tracks(
+                &self.model,
+                &self.problem,
+                std::slice::from_ref(meas),
+                label,
+            )?;
             for t in one.tracks() {
                 tracks.push(t.clone())?;
             }
-            associations.push((label, meas));
+            associations.push((label, meas.clone()));
         }
+        let first = self.problem.first_frame();
+        let problem = std::mem::replace(&mut self.problem, Problem::empty(&self.model, first));
+        self.committed.clear();
+        self.released.clear();
+        self.map.clear();
         Ok(OnlineResult {
             tracks,
             associations,

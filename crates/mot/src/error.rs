@@ -24,20 +24,20 @@ pub enum Error {
     #[error(transparent)]
     Frames(#[from] sensors_video::Error),
     /// A MOTChallenge file that does not parse; `source` names the line.
-    #[error("{file} is not a valid MOTChallenge file: {source}")]
+    #[error("{file} is not a valid MOTChallenge file: {error}")]
     File {
         /// The file's name as the user gave it.
         file: String,
-        /// What is wrong, with the line.
-        source: tracker_model::Error,
+        /// What is wrong, with the line (in the message, so not also a source).
+        error: tracker_model::Error,
     },
     /// Rows of a file that parse but do not make tracks (e.g. one id twice in a frame).
-    #[error("in {file}: {source}")]
+    #[error("in {file}: {error}")]
     Rows {
         /// The file.
         file: String,
-        /// What is wrong.
-        source: tracker_model::Error,
+        /// What is wrong (in the message, so not also a source).
+        error: tracker_model::Error,
     },
     /// Detections were needed and there are none.
     #[error("{what} holds no detections")]
@@ -57,20 +57,21 @@ pub enum Error {
         what: String,
     },
     /// A table of the configuration file with a wrong value; `source` names the key.
-    #[error("in the [{table}] table of the configuration: {source}")]
+    #[error("in the [{table}] table of the configuration: {error}")]
     Table {
         /// The table, e.g. "offline".
         table: &'static str,
-        /// What is wrong in it.
-        source: Box<Error>,
+        /// What is wrong in it (in the message, so not also a source: a chain printer such
+        /// as anyhow's `{:#}` would repeat it).
+        error: Box<Error>,
     },
     /// A configuration whose keys or types do not fit the table.
-    #[error("in the [{table}] table of the configuration: {source}")]
+    #[error("in the [{table}] table of the configuration: {error}")]
     TableSyntax {
         /// The table.
         table: &'static str,
-        /// What serde said.
-        source: toml::de::Error,
+        /// What serde said (in the message, so not also a source).
+        error: toml::de::Error,
     },
     /// The configuration could not be written as TOML.
     #[error("the configuration cannot be written as TOML: {0}")]
@@ -94,7 +95,7 @@ pub enum Error {
     },
     /// Image frames were given to a tracker that does not read pictures.
     #[error(
-        "a frame folder runs the fused PHD tracker: use it with the phd tracker, not {tracker}"
+        "a frame folder (--frames) runs the fused PHD tracker: use it with --tracker phd, not {tracker}"
     )]
     FramesNeedPhd {
         /// The tracker asked for.
@@ -140,7 +141,7 @@ impl<T, E: Into<Error>> InTable<T> for std::result::Result<T, E> {
     fn in_table(self, table: &'static str) -> Result<T> {
         self.map_err(|e| Error::Table {
             table,
-            source: Box::new(e.into()),
+            error: Box::new(e.into()),
         })
     }
 }

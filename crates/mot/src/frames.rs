@@ -108,6 +108,11 @@ pub(crate) fn track_frames_resolved(
     seed: u64,
 ) -> Result<TrackSet> {
     let mut tracker = FusedPhd::open(dir, config.phd, fused.clone(), seed)?;
+    if rows.is_empty() {
+        return Err(Error::NoDetections {
+            what: "the input".into(),
+        });
+    }
     let detections = crate::driver::detections_of(rows);
     crate::driver::run(&mut tracker, &detections, None)
 }
@@ -140,13 +145,17 @@ impl FusedPhd {
 impl BatchTracker for FusedPhd {
     type Error = Error;
 
+    /// No scan, no track (the local detectors start from the global detections). A point
+    /// detection is an error: the filter's state is a box.
     fn track(&mut self, scans: &[FrameDetections]) -> Result<TrackSet> {
         if scans.is_empty() {
-            return Err(Error::NoDetections {
-                what: "the input".into(),
-            });
+            return Ok(TrackSet::new());
         }
         check_detections(&self.folder, scans)?;
+        let by_frame: BTreeMap<Frame, Vec<BoundingBox>> = scans
+            .iter()
+            .map(|s| Ok((s.frame, boxes_of(&s.detections)?)))
+            .collect::<Result<_>>()?;
         let mut rng = ChaCha8Rng::seed_from_u64(self.seed);
         let detector_seed: u64 = rng.random();
         let feed = FrameFeed::new();
@@ -157,15 +166,6 @@ impl BatchTracker for FusedPhd {
             factory,
             self.fused.fusion,
         )?;
-        let by_frame: BTreeMap<Frame, Vec<BoundingBox>> = scans
-            .iter()
-            .map(|s| {
-                (
-                    s.frame,
-                    s.detections.iter().filter_map(Detection::bbox).collect(),
-                )
-            })
-            .collect();
         let mut previous: Option<Frame> = None;
         for frame in self.folder.frames() {
             feed.set(frame, Arc::new(rgb(self.folder.load(frame)?)?));
@@ -178,6 +178,24 @@ impl BatchTracker for FusedPhd {
         }
         Ok(tracker.tracks()?)
     }
+}
+
+/// The boxes of a frame's detections; a point detection is an error.
+fn boxes_of(detections: &[Detection]) -> Result<Vec<BoundingBox>> {
+    detections
+        .iter()
+        .map(|d| {
+            d.bbox().ok_or_else(|| {
+                crate::error::invalid(
+                    "detection",
+                    format!(
+                        "detection {} is a point; the PHD filter tracks boxes",
+                        d.id.0
+                    ),
+                )
+            })
+        })
+        .collect()
 }
 
 /// Checks that every frame of `scans` has an image in `folder`.

@@ -15,9 +15,9 @@ use tracker_model::{MotRow, TrackSet, read_mot};
 
 /// Rows of a MOTChallenge file and notes for the user (a skipped header).
 pub fn read_rows(text: &str, file: &str) -> Result<(Vec<MotRow>, Vec<String>)> {
-    let parsed = read_mot(text.as_bytes()).map_err(|source| Error::File {
+    let parsed = read_mot(text.as_bytes()).map_err(|error| Error::File {
         file: file.into(),
-        source,
+        error,
     })?;
     let notes = parsed
         .header
@@ -82,9 +82,9 @@ pub fn load_evaluation_pair(
             what,
         });
     }
-    let gt = TrackSet::from_mot_rows(&gt_rows).map_err(|source| Error::Rows {
+    let gt = TrackSet::from_mot_rows(&gt_rows).map_err(|error| Error::Rows {
         file: gt_file.into(),
-        source,
+        error,
     })?;
     let (pred_rows, pred_notes) = read_rows(pred_text, pred_file)?;
     notes.extend(pred_notes);
@@ -94,9 +94,9 @@ pub fn load_evaluation_pair(
              IDF1 and HOTA are 0), as TrackEval scores an empty tracker output"
         ));
     }
-    let pred = TrackSet::from_mot_rows(&pred_rows).map_err(|source| Error::Rows {
+    let pred = TrackSet::from_mot_rows(&pred_rows).map_err(|error| Error::Rows {
         file: pred_file.into(),
-        source,
+        error,
     })?;
     Ok(EvaluationPair { gt, pred, notes })
 }

@@ -223,6 +223,29 @@ fn jpda_follows_the_targets_it_is_given_through_the_driver() {
     let last = rows.iter().map(|r| r.frame).max().unwrap();
     assert_eq!(tracks.len(), n);
     assert!(tracks.tracks().iter().all(|t| t.last_frame() == Some(last)));
+    // It follows them: ten frames on, every track is within 25 px of a true person's centre
+    // (walkers move about 1-3 px a frame, so a track left behind at its prior fails this).
+    let gt = mot::text::parse_evaluation_pair((GT, "gt"), (GT, "gt"))
+        .unwrap()
+        .0;
+    let at = first + 10;
+    let truth: Vec<tracker_model::Vec2> = gt
+        .tracks()
+        .iter()
+        .filter_map(|t| t.at(at).map(|p| p.location.position()))
+        .collect();
+    for t in tracks.tracks() {
+        let p = t.at(at).unwrap().location.position();
+        let nearest = truth
+            .iter()
+            .map(|c| (c - p).norm())
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            nearest < 25.0,
+            "track {:?} is {nearest} px from every person",
+            t.id()
+        );
+    }
 }
 
 #[test]

@@ -125,12 +125,13 @@ pub enum Error {
         dir: PathBuf,
     },
     /// An I/O failure.
-    #[error("I/O error on {path}: {source}")]
+    #[error("I/O error on {path}: {error}")]
     Io {
         /// The file or folder.
         path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
+        /// The underlying error (in the message, so not also a source: a chain printer such as
+        /// anyhow's `{:#}` would repeat it).
+        error: std::io::Error,
     },
     /// A frame whose size or channel count does not match the model it is fed to.
     #[error(

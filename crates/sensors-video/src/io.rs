@@ -26,9 +26,9 @@ fn image_err(path: &Path, e: &image::ImageError) -> Error {
 /// Reads one PNG/PGM/PPM file as an 8-bit grey or RGB frame; any other pixel format (16-bit,
 /// alpha) is an [`Error::UnsupportedPixelFormat`], never silently converted.
 pub fn read_image(path: &Path) -> Result<VideoFrame> {
-    let bytes = std::fs::read(path).map_err(|source| Error::Io {
+    let bytes = std::fs::read(path).map_err(|error| Error::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     decode_image(&bytes, path)
 }
@@ -43,9 +43,9 @@ pub fn decode_image(bytes: &[u8], source: &Path) -> Result<VideoFrame> {
     };
     let img = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
-        .map_err(|source_err| Error::Io {
+        .map_err(|error| Error::Io {
             path: source.to_path_buf(),
-            source: source_err,
+            error,
         })?
         .decode()
         .map_err(|e| match &e {
@@ -160,9 +160,9 @@ impl FrameFolder {
     /// Lists `dir`'s images by frame number and reads each one's header (not its pixels) to
     /// check that all have the first one's size.
     pub fn open(dir: &Path) -> Result<Self> {
-        let io = |source| Error::Io {
+        let io = |error| Error::Io {
             path: dir.to_path_buf(),
-            source,
+            error,
         };
         let mut frames: BTreeMap<u32, PathBuf> = BTreeMap::new();
         for entry in std::fs::read_dir(dir).map_err(io)? {
@@ -245,9 +245,9 @@ impl FrameFolder {
             frame,
             dir: self.dir.clone(),
         })?;
-        let bytes = std::fs::read(path).map_err(|source| Error::Io {
+        let bytes = std::fs::read(path).map_err(|error| Error::Io {
             path: path.clone(),
-            source,
+            error,
         })?;
         let decoded = decode_image(&bytes, path).map_err(|e| match e {
             Error::Image { path, reason } => folder_image_err(&path, reason),

@@ -167,7 +167,8 @@ pub trait Tracker {
     ) -> std::result::Result<Vec<TrackState>, Self::Error>;
 
     /// Ends the run: every track, as the tracker's final estimate of the whole run (smoothed
-    /// where the tracker smooths).
+    /// where the tracker smooths). The tracker is spent afterwards: a new run needs a new
+    /// tracker (stepping it again is not a supported way to start one).
     fn finish(&mut self) -> std::result::Result<TrackSet, Self::Error>;
 }
 
@@ -176,7 +177,9 @@ pub trait BatchTracker {
     /// What can go wrong.
     type Error: std::error::Error + Send + Sync + 'static;
 
-    /// Tracks the scans (frames in increasing order, as [`scans_of`] gives them).
+    /// Tracks the scans (frames in increasing order, as [`scans_of`] gives them); no scan
+    /// gives no track. A tracker whose state carries over (an [`Online`] one) is spent
+    /// afterwards.
     fn track(&mut self, scans: &[FrameDetections]) -> std::result::Result<TrackSet, Self::Error>;
 }
 

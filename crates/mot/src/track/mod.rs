@@ -537,7 +537,12 @@ pub struct FileTracker {
 impl tracker_model::BatchTracker for FileTracker {
     type Error = Error;
 
+    /// No scan, no track (as every tracker of the interface); the file trackers' own entry
+    /// point, [`track_detections`], calls an empty file an error.
     fn track(&mut self, scans: &[tracker_model::FrameDetections]) -> Result<TrackSet> {
+        if scans.is_empty() {
+            return Ok(TrackSet::new());
+        }
         let rows = crate::driver::rows_of(scans)?;
         track_detections(self.kind, &rows, &self.config, self.seed)
     }
@@ -1057,10 +1062,9 @@ fn overridden<T: Clone + serde::Serialize + serde::de::DeserializeOwned>(
     };
     let mut table = toml::Table::try_from(base)?;
     table.extend(overrides.clone());
-    table.try_into().map_err(|source| Error::TableSyntax {
-        table: what,
-        source,
-    })
+    table
+        .try_into()
+        .map_err(|error| Error::TableSyntax { table: what, error })
 }
 
 #[cfg(test)]
