@@ -8,7 +8,8 @@
 //! γ_t(i) = α̂_t(i) β̂_t(i) and ξ_t(i, j) = α̂_t(i) a_ij b_j(o_{t+1}) β̂_{t+1}(j) / c_{t+1}.
 
 use crate::error::{Error, Result};
-use crate::model::Hmm;
+use crate::model::{Hmm, Logs};
+use crate::transitions::SparseView;
 
 /// Scaled forward variables.
 #[derive(Debug, Clone, PartialEq)]
@@ -443,85 +444,10 @@ pub fn viterbi(hmm: &Hmm, obs: &[usize]) -> Result<(Vec<usize>, f64)> {
     let n = hmm.n_states();
     let len = obs.len();
     let logs = hmm.logs();
-    let log_emission = |m: usize| &logs.by_symbol[m * n..(m + 1) * n];
-    let first = logs
-        .initial
-        .iter()
-        .zip(log_emission(obs[0]))
-        .map(|(p, b)| p + b);
-    let a = hmm.transitions();
     let mut path = vec![0; len];
-    let best = match a.sparse_view() {
-        None => {
-            let columns = &logs.transitions_by_column;
-            let mut delta = vec![0.0; len * n];
-            delta[..n].iter_mut().zip(first).for_each(|(d, v)| *d = v);
-            for t in 1..len {
-                let (done, rest) = delta.split_at_mut(t * n);
-                let prev = &done[(t - 1) * n..];
-                let cur = &mut rest[..n];
-                let lb = log_emission(obs[t]);
-                let mut blocks = columns.chunks_exact(4 * n);
-                let mut out = cur.chunks_exact_mut(4);
-                for ((block, lb), out) in (&mut blocks).zip(lb.chunks_exact(4)).zip(&mut out) {
-                    let m = max_plus4(prev, block);
-                    for ((o, m), b) in out.iter_mut().zip(m).zip(lb) {
-                        *o = m + b;
-                    }
-                }
-                let tail_lb = &lb[lb.len() - lb.len() % 4..];
-                let tail_columns = blocks.remainder().chunks_exact(n);
-                for ((o, column), b) in out
-                    .into_remainder()
-                    .iter_mut()
-                    .zip(tail_columns)
-                    .zip(tail_lb)
-                {
-                    *o = max_plus(prev, column) + b;
-                }
-            }
-            let (mut state, best) = first_max(&delta[(len - 1) * n..]);
-            path[len - 1] = state;
-            for t in (1..len).rev() {
-                let prev = &delta[(t - 1) * n..t * n];
-                state = first_max_plus(prev, &columns[state * n..(state + 1) * n]);
-                path[t - 1] = state;
-            }
-            best
-        }
-        Some(view) => {
-            let columns = &logs.transitions_by_column;
-            let mut delta: Vec<f64> = first.collect();
-            let mut next = vec![f64::NEG_INFINITY; n];
-            let mut back = vec![0u32; len * n];
-            for t in 1..len {
-                let psi = &mut back[t * n..(t + 1) * n];
-                let lb = log_emission(obs[t]);
-                // Rows ascending within each column with a strict comparison keep the lowest
-                // predecessor on ties.
-                for (j, ((v, p), b)) in next.iter_mut().zip(psi.iter_mut()).zip(lb).enumerate() {
-                    let range = view.col_ptr[j]..view.col_ptr[j + 1];
-                    let (mut best, mut arg) = (f64::NEG_INFINITY, 0);
-                    for (&i, &la) in view.col_rows[range.clone()].iter().zip(&columns[range]) {
-                        let cand = delta[i] + la;
-                        if cand > best {
-                            best = cand;
-                            arg = i;
-                        }
-                    }
-                    *v = best + b;
-                    *p = arg as u32;
-                }
-                std::mem::swap(&mut delta, &mut next);
-            }
-            let (mut state, best) = first_max(&delta);
-            path[len - 1] = state;
-            for t in (1..len).rev() {
-                state = back[t * n + state] as usize;
-                path[t - 1] = state;
-            }
-            best
-        }
+    let best = match hmm.transitions().sparse_view() {
+        None => viterbi_dense(logs, n, obs, &mut path),
+        Some(view) => viterbi_sparse(logs, &view, n, obs, &mut path),
     };
     if best == f64::NEG_INFINITY {
         return Err(Error::ImpossibleObservation {
@@ -530,6 +456,103 @@ pub fn viterbi(hmm: &Hmm, obs: &[usize]) -> Result<(Vec<usize>, f64)> {
         });
     }
     Ok((path, best))
+}
+
+/// log π + log b(o₀), δ₁ of the Viterbi recursion.
+fn viterbi_start<'a>(logs: &'a Logs, n: usize, o0: usize) -> impl Iterator<Item = f64> + 'a {
+    logs.initial
+        .iter()
+        .zip(&logs.by_symbol[o0 * n..(o0 + 1) * n])
+        .map(|(p, b)| p + b)
+}
+
+/// [`viterbi`] on dense storage: δ_t kept for every step, the recursion a max-plus product
+/// over the transposed log A, the predecessors found again while tracing back. Fills `path`
+/// and returns the best log-probability.
+fn viterbi_dense(logs: &Logs, n: usize, obs: &[usize], path: &mut [usize]) -> f64 {
+    let len = obs.len();
+    let log_emission = |m: usize| &logs.by_symbol[m * n..(m + 1) * n];
+    let first = viterbi_start(logs, n, obs[0]);
+    let columns = &logs.transitions_by_column;
+    let mut delta = vec![0.0; len * n];
+    delta[..n].iter_mut().zip(first).for_each(|(d, v)| *d = v);
+    for t in 1..len {
+        let (done, rest) = delta.split_at_mut(t * n);
+        let prev = &done[(t - 1) * n..];
+        let cur = &mut rest[..n];
+        let lb = log_emission(obs[t]);
+        let mut blocks = columns.chunks_exact(4 * n);
+        let mut out = cur.chunks_exact_mut(4);
+        for ((block, lb), out) in (&mut blocks).zip(lb.chunks_exact(4)).zip(&mut out) {
+            let m = max_plus4(prev, block);
+            for ((o, m), b) in out.iter_mut().zip(m).zip(lb) {
+                *o = m + b;
+            }
+        }
+        let tail_lb = &lb[lb.len() - lb.len() % 4..];
+        let tail_columns = blocks.remainder().chunks_exact(n);
+        for ((o, column), b) in out
+            .into_remainder()
+            .iter_mut()
+            .zip(tail_columns)
+            .zip(tail_lb)
+        {
+            *o = max_plus(prev, column) + b;
+        }
+    }
+    let (mut state, best) = first_max(&delta[(len - 1) * n..]);
+    path[len - 1] = state;
+    for t in (1..len).rev() {
+        let prev = &delta[(t - 1) * n..t * n];
+        state = first_max_plus(prev, &columns[state * n..(state + 1) * n]);
+        path[t - 1] = state;
+    }
+    best
+}
+
+/// [`viterbi`] on sparse storage: a gather down each column of log A, keeping the
+/// predecessors. Fills `path` and returns the best log-probability.
+fn viterbi_sparse(
+    logs: &Logs,
+    view: &SparseView<'_>,
+    n: usize,
+    obs: &[usize],
+    path: &mut [usize],
+) -> f64 {
+    let len = obs.len();
+    let log_emission = |m: usize| &logs.by_symbol[m * n..(m + 1) * n];
+    let first = viterbi_start(logs, n, obs[0]);
+    let columns = &logs.transitions_by_column;
+    let mut delta: Vec<f64> = first.collect();
+    let mut next = vec![f64::NEG_INFINITY; n];
+    let mut back = vec![0u32; len * n];
+    for t in 1..len {
+        let psi = &mut back[t * n..(t + 1) * n];
+        let lb = log_emission(obs[t]);
+        // Rows ascending within each column with a strict comparison keep the lowest
+        // predecessor on ties.
+        for (j, ((v, p), b)) in next.iter_mut().zip(psi.iter_mut()).zip(lb).enumerate() {
+            let range = view.col_ptr[j]..view.col_ptr[j + 1];
+            let (mut best, mut arg) = (f64::NEG_INFINITY, 0);
+            for (&i, &la) in view.col_rows[range.clone()].iter().zip(&columns[range]) {
+                let cand = delta[i] + la;
+                if cand > best {
+                    best = cand;
+                    arg = i;
+                }
+            }
+            *v = best + b;
+            *p = arg as u32;
+        }
+        std::mem::swap(&mut delta, &mut next);
+    }
+    let (mut state, best) = first_max(&delta);
+    path[len - 1] = state;
+    for t in (1..len).rev() {
+        state = back[t * n + state] as usize;
+        path[t - 1] = state;
+    }
+    best
 }
 
 /// The first index of the largest value (0 and −∞ when every value is −∞).
