@@ -23,15 +23,7 @@ pub fn rows_of(scans: &[FrameDetections]) -> Result<Vec<MotRow>> {
     let mut rows = Vec::with_capacity(scans.iter().map(|s| s.detections.len()).sum());
     for scan in scans {
         for d in &scan.detections {
-            let bbox = d.bbox().ok_or_else(|| {
-                crate::error::invalid(
-                    "detection",
-                    format!(
-                        "detection {} is a point; a detection file holds boxes",
-                        d.id.0
-                    ),
-                )
-            })?;
+            let bbox = d.require_box("a detection file holds boxes")?;
             rows.push(MotRow {
                 frame: scan.frame,
                 id: -1,

@@ -182,20 +182,10 @@ impl BatchTracker for FusedPhd {
 
 /// The boxes of a frame's detections; a point detection is an error.
 fn boxes_of(detections: &[Detection]) -> Result<Vec<BoundingBox>> {
-    detections
+    Ok(detections
         .iter()
-        .map(|d| {
-            d.bbox().ok_or_else(|| {
-                crate::error::invalid(
-                    "detection",
-                    format!(
-                        "detection {} is a point; the PHD filter tracks boxes",
-                        d.id.0
-                    ),
-                )
-            })
-        })
-        .collect()
+        .map(|d| d.require_box("the PHD filter tracks boxes"))
+        .collect::<tracker_model::Result<_>>()?)
 }
 
 /// Checks that every frame of `scans` has an image in `folder`.

@@ -191,18 +191,8 @@ impl<F: PhdFilter, D: LocalDetectorFactory> tracker_model::Tracker for PhdTracke
         };
         let boxes = detections
             .iter()
-            .map(|d| {
-                d.bbox().ok_or_else(|| {
-                    invalid_parameter(
-                        "detection",
-                        format!(
-                            "detection {} is a point; the PHD filter tracks boxes",
-                            d.id.0
-                        ),
-                    )
-                })
-            })
-            .collect::<Result<Vec<BoundingBox>>>()?;
+            .map(|d| d.require_box("the PHD filter tracks boxes"))
+            .collect::<tracker_model::Result<Vec<BoundingBox>>>()?;
         let output = self.step_after(frames, frame, &boxes)?;
         Ok(output
             .estimates

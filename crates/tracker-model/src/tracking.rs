@@ -94,6 +94,15 @@ impl Detection {
         }
     }
 
+    /// The box, or for a point an `InvalidParameter` error saying `why` a box is needed
+    /// (e.g. "the PHD filter tracks boxes"): the one check every box tracker makes.
+    pub fn require_box(&self, why: &str) -> Result<BoundingBox> {
+        self.bbox().ok_or_else(|| Error::InvalidParameter {
+            name: "detection",
+            reason: format!("detection {} is a point; {why}", self.id.0),
+        })
+    }
+
     /// The frame, the seconds mapped by `clock`; a time in seconds without a clock is an
     /// error.
     pub fn frame(&self, clock: Option<&FrameClock>) -> Result<Frame> {
