@@ -163,13 +163,41 @@ fn parse_requirements(text: &str) -> Result<Vec<Requirement>> {
         .collect()
 }
 
-/// Runs the evaluation and prints a table or JSON; with `require`, false when a threshold fails.
+/// Runs the evaluation and prints a table or JSON on stdout; with `require`, false when a
+/// threshold fails. Notes and requirement verdicts go to stderr, so `--json` output parses
+/// whatever else is asked.
 #[expect(
     clippy::print_stdout,
     clippy::print_stderr,
     reason = "the evaluation is printed on the terminal, notes on stderr"
 )]
 pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool, require: Option<&str>) -> Outcome {
+    let evaluation = evaluate_files(gt, pred, iou, json, require)?;
+    for note in &evaluation.notes {
+        eprintln!("note: {note}");
+    }
+    println!("{}", evaluation.printed);
+    for verdict in &evaluation.verdicts {
+        eprintln!("{verdict}");
+    }
+    Ok(evaluation.all_hold)
+}
+
+/// What [`run`] prints: the result (stdout) and the notes and verdicts (stderr).
+struct Evaluation {
+    notes: Vec<String>,
+    printed: String,
+    verdicts: Vec<String>,
+    all_hold: bool,
+}
+
+fn evaluate_files(
+    gt: &Path,
+    pred: &Path,
+    iou: f64,
+    json: bool,
+    require: Option<&str>,
+) -> Result<Evaluation> {
     let requirements = require
         .map(parse_requirements)
         .transpose()?
@@ -179,16 +207,13 @@ pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool, require: Option<&str>) 
         pred: pred_set,
         notes,
     } = load_with_notes(gt, pred)?;
-    for note in &notes {
-        eprintln!("note: {note}");
-    }
     let config = EvalConfig {
         matching: MatchConfig::iou(iou),
     };
     let report = evaluate(&gt_set, &pred_set, &config).context("evaluation failed")?;
     let values = rows(&report);
-    if json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
+    let printed = if json {
+        serde_json::to_string_pretty(&report)?
     } else {
         let mut table = Table::new(
             &format!(
@@ -203,9 +228,10 @@ pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool, require: Option<&str>) 
         for (name, value) in &values {
             table.row(vec![name.to_string(), fmt_num(*value)]);
         }
-        println!("{}", to_markdown(&table));
-    }
+        to_markdown(&table)
+    };
     let mut all_hold = true;
+    let mut verdicts = Vec::with_capacity(requirements.len());
     for req in &requirements {
         let value = values
             .iter()
@@ -214,21 +240,41 @@ pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool, require: Option<&str>) 
         let holds = req.holds(value);
         all_hold &= holds;
         let verdict = if holds { "holds" } else { "FAILS" };
-        println!(
+        verdicts.push(format!(
             "requirement {}{}{}: {verdict} ({} = {})",
             req.metric,
             req.op,
             req.bound,
             req.metric,
             fmt_num(value)
-        );
+        ));
     }
-    Ok(all_hold)
+    Ok(Evaluation {
+        notes,
+        printed,
+        verdicts,
+        all_hold,
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn json_stays_parseable_with_requirements() {
+        let dir = std::env::temp_dir().join(format!("xtask-eval-json-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let gt = dir.join("gt.txt");
+        std::fs::write(&gt, "1,1,0,0,10,10,1,-1,-1,-1\n2,1,1,0,10,10,1,-1,-1,-1\n").unwrap();
+        let run = evaluate_files(&gt, &gt, 0.5, true, Some("MOTA>=0.9,IDF1<0.5")).unwrap();
+        let parsed: serde_json::Value = serde_json::from_str(&run.printed).unwrap();
+        assert!(parsed.is_object(), "{}", run.printed);
+        assert_eq!(run.verdicts.len(), 2, "{:?}", run.verdicts);
+        assert!(run.verdicts[0].contains("holds") && run.verdicts[1].contains("FAILS"));
+        assert!(!run.all_hold);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn malformed_files_name_the_file_and_line() {

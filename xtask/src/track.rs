@@ -8,7 +8,8 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use mot::text::read_detections;
 use mot::track::{
-    TrackConfig, TrackerKind, empty_output_warning, render_config, track_detections_with_frames,
+    TrackConfig, TrackerKind, effective_config, empty_output_warning, render_config,
+    track_detections_with_frames,
 };
 use tracker_model::{MotRow, format_mot};
 
@@ -61,12 +62,7 @@ pub struct Request<'a> {
 pub fn run(req: &Request<'_>) -> Outcome {
     let settings = read_config(req.config)?;
     if req.print_config {
-        let rows = req.input.map(read_input).transpose()?.unwrap_or_default();
-        let effective = match req.tracker {
-            Some(tracker) => settings.resolve_tracked(&rows, tracker)?.0,
-            None => settings.resolve(&rows)?,
-        };
-        print!("{}", render_config(&effective, req.tracker)?);
+        print!("{}", config_text(req, &settings)?);
         return Ok(true);
     }
     let (Some(tracker), Some(input), Some(out)) = (req.tracker, req.input, req.out) else {
@@ -108,6 +104,21 @@ pub fn run(req: &Request<'_>) -> Outcome {
         1e3 * elapsed / frames.len().max(1) as f64
     );
     Ok(true)
+}
+
+/// The configuration `--print-config` prints: what the run would use, `--frames` included
+/// (which implies the PHD tracker when none is named).
+fn config_text(req: &Request<'_>, settings: &TrackConfig) -> Result<String> {
+    let rows = req.input.map(read_input).transpose()?.unwrap_or_default();
+    let tracker = match (req.tracker, req.frames) {
+        (None, Some(_)) => Some(TrackerKind::Phd),
+        (tracker, _) => tracker,
+    };
+    let effective = match tracker {
+        Some(tracker) => effective_config(tracker, &rows, settings, req.frames.is_some())?.0,
+        None => settings.resolve(&rows)?,
+    };
+    Ok(render_config(&effective, tracker)?)
 }
 
 /// The fitted parameters the tracker used, on one line.
@@ -177,4 +188,38 @@ pub fn write_walkers(seed: u64, fps: f64, seconds: f64, out: &Path) -> Outcome {
         out.display()
     );
     Ok(true)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn print_config_shows_what_frames_change() {
+        let dir = std::env::temp_dir().join(format!("xtask-track-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let seq = mot::walkers::WalkersConfig::default()
+            .generate_seeded(3)
+            .unwrap();
+        let input = dir.join("det.txt");
+        fs::write(&input, format_mot(&seq.detections)).unwrap();
+        let request = |frames| Request {
+            tracker: Some(TrackerKind::Phd),
+            input: Some(&input),
+            out: None,
+            config: None,
+            seed: 1,
+            print_config: true,
+            frames,
+        };
+        let settings = TrackConfig::default();
+        let plain = config_text(&request(None), &settings).unwrap();
+        let fused = config_text(&request(Some(&dir)), &settings).unwrap();
+        let fused_p = mot::frames::FusedSettings::default().p_detect;
+        // The run with --frames uses the fused detection probability; the printed
+        // configuration must say so (it printed the plain one before).
+        assert!(fused.contains(&format!("p_detect = {fused_p}")), "{fused}");
+        assert_ne!(plain, fused);
+        fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -4,7 +4,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::config::Model;
-use crate::error::{Result, invalid_parameter};
+use crate::error::{Result, ensure_chains, ensure_samples};
 use crate::nearest::greedy_initial_partition;
 use crate::problem::Problem;
 use crate::sampler::{McmcdaRun, run_chains};
@@ -35,15 +35,11 @@ impl Default for BatchConfig {
 }
 
 impl BatchConfig {
-    /// Checks that there is at least one chain. [`batch_mcmcda`] calls this.
+    /// Checks the chain count (1 to [`crate::MAX_CHAINS`]) and the steps per chain (at most
+    /// [`crate::MAX_SAMPLES`]). [`batch_mcmcda`] calls this.
     pub fn check(&self) -> Result<()> {
-        if self.chains == 0 {
-            return Err(invalid_parameter(
-                "chains",
-                "0; a batch run needs at least one chain".into(),
-            ));
-        }
-        Ok(())
+        ensure_chains(self.chains)?;
+        ensure_samples(self.samples, "samples")
     }
 }
 

@@ -189,3 +189,33 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 pub(crate) fn invalid_parameter(name: &'static str, reason: String) -> Error {
     Error::Model(tracker_model::Error::InvalidParameter { name, reason })
 }
+
+/// The most MCMC steps one chain may be asked for (10⁹, several minutes of one core even at
+/// the sampler's ~0.3 µs a step): a count past it is a typo, not a wish, and would run for
+/// hours with nothing to show.
+pub const MAX_SAMPLES: u64 = 1_000_000_000;
+
+/// The most chains one run may start in parallel.
+pub const MAX_CHAINS: usize = 64;
+
+/// Checks a count of MCMC steps against [`MAX_SAMPLES`].
+pub(crate) fn ensure_samples(samples: u64, name: &'static str) -> Result<()> {
+    if samples > MAX_SAMPLES {
+        return Err(invalid_parameter(
+            name,
+            format!("{samples}; at most {MAX_SAMPLES} samples per chain"),
+        ));
+    }
+    Ok(())
+}
+
+/// Checks a chain count: 1 to [`MAX_CHAINS`].
+pub(crate) fn ensure_chains(chains: usize) -> Result<()> {
+    if !(1..=MAX_CHAINS).contains(&chains) {
+        return Err(invalid_parameter(
+            "chains",
+            format!("{chains}; it must be in 1..={MAX_CHAINS}"),
+        ));
+    }
+    Ok(())
+}

@@ -73,10 +73,12 @@ mod tests;
 
 pub use batch::{BatchConfig, batch_mcmcda};
 pub use config::{GapDistribution, McmcdaConfig, Model, Move, MoveWeights, TrackEnd, TrackInit};
-pub use error::{Error, Result};
+pub use error::{Error, MAX_CHAINS, MAX_SAMPLES, Result};
 pub use estimates::{measurement_labels, smoothed_tracks, tracks_by_origin};
 pub use nearest::{Assignment, AssignmentCost, NearestNeighbourConfig, nearest_neighbour_tracks};
-pub use online::{CommittedPiece, OnlineConfig, OnlineResult, OnlineStep, OnlineTracker};
+pub use online::{
+    CommittedPiece, MAX_WINDOW, OnlineConfig, OnlineResult, OnlineStep, OnlineTracker,
+};
 pub use problem::{MeasId, Problem};
 pub use sampler::{McmcdaRun, MoveStats};
 

@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use tracker_model::{Frame, GATE_CHI2_2D, TrackSet, Vec2, ensure_positive};
 
 use crate::config::Model;
-use crate::error::{Error, Result, invalid_parameter};
+use crate::error::{Error, Result, ensure_chains, ensure_samples, invalid_parameter};
 use crate::estimates::smoothed_tracks;
 use crate::partition::Partition;
 use crate::problem::{MeasId, Problem};
@@ -74,6 +74,10 @@ pub struct OnlineConfig {
     pub chains: usize,
 }
 
+/// The longest sliding window and coasting, in scans: the window's chain and its memory grow
+/// with it, and a thousand scans is far past any window Algorithm 4 is run with.
+pub const MAX_WINDOW: usize = 1000;
+
 impl Default for OnlineConfig {
     fn default() -> Self {
         Self {
@@ -92,7 +96,8 @@ impl Default for OnlineConfig {
 
 impl OnlineConfig {
     /// Checks the window (at least 2 scans, the shortest a track spans), the extension gate
-    /// (finite, > 0), the rival ratio (≥ 0, ∞ allowed) and the chain count (1 to 64).
+    /// (finite, > 0), the rival ratio (≥ 0, ∞ allowed), the chain count (1 to 64) and the
+    /// bounds on window, coasting and samples ([`MAX_WINDOW`], [`crate::MAX_SAMPLES`]).
     /// [`OnlineTracker::new`] calls this.
     pub fn check(&self) -> Result<()> {
         if self.window < 2 {
@@ -111,13 +116,20 @@ impl OnlineConfig {
                 ),
             ));
         }
-        if !(1..=64).contains(&self.chains) {
+        if self.window > MAX_WINDOW {
             return Err(invalid_parameter(
-                "chains",
-                format!("{}; it must be in 1..=64", self.chains),
+                "window",
+                format!("{} scans; at most {MAX_WINDOW}", self.window),
             ));
         }
-        Ok(())
+        if self.coast_scans > MAX_WINDOW {
+            return Err(invalid_parameter(
+                "coast_scans",
+                format!("{} scans; at most {MAX_WINDOW}", self.coast_scans),
+            ));
+        }
+        ensure_samples(self.samples_per_scan, "samples_per_scan")?;
+        ensure_chains(self.chains)
     }
 }
 

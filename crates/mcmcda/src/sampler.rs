@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::config::Move;
-use crate::error::Result;
+use crate::error::{Result, ensure_chains, ensure_samples};
 use crate::partition::{Partition, TrackState};
 use crate::problem::MeasId;
 use crate::proposal::{End, FirstStep, ln_count};
@@ -718,14 +718,17 @@ pub struct McmcdaRun {
 
 /// Runs `n_chains` independent chains of `n_samples` steps each from `initial`, in parallel;
 /// chain i draws from ChaCha8(seed) stream i, so the result does not depend on the thread
-/// count. The MAP is the best over all chains (ties go to the lowest chain index).
+/// count. The MAP is the best over all chains (ties go to the lowest chain index). The chain
+/// count must be in 1..=[`crate::MAX_CHAINS`] and the steps at most [`crate::MAX_SAMPLES`].
 pub fn run_chains(
     initial: &Partition<'_>,
     n_chains: usize,
     n_samples: u64,
     seed: u64,
 ) -> Result<McmcdaRun> {
-    let results: Vec<(Vec<Vec<MeasId>>, f64, MoveStats)> = (0..n_chains.max(1))
+    ensure_chains(n_chains)?;
+    ensure_samples(n_samples, "samples")?;
+    let results: Vec<(Vec<Vec<MeasId>>, f64, MoveStats)> = (0..n_chains)
         .into_par_iter()
         .map(|i| {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -11,7 +11,7 @@ use tracker_model::{
     ensure_positive,
 };
 
-use crate::error::{Error, Result, invalid_parameter};
+use crate::error::{Error, Result, ensure_samples, invalid_parameter};
 
 /// Settings of single-scan association.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -78,7 +78,8 @@ impl SingleScanConfig {
                 format!("{} must lie in [0, 1)", self.laziness),
             ));
         }
-        Ok(())
+        ensure_samples(self.burn_in, "burn_in")?;
+        ensure_samples(self.samples, "samples")
     }
 }
 

@@ -54,7 +54,11 @@ pub enum Error {
         expected_channels: usize,
     },
     /// A pixel format this crate does not read (only 8-bit grey and 8-bit RGB / YUV).
-    #[error("unsupported pixel format {format} in {source_name}")]
+    #[error(
+        "unsupported pixel format {format} in {source_name}: only 8-bit grey or RGB (YUV 4:2:0, \
+         4:4:4 or mono in y4m) is read; convert it, e.g. `ffmpeg -i IN -pix_fmt rgb24 OUT.png` \
+         (drops alpha, 16 to 8 bits) or `ffmpeg -i IN -pix_fmt yuv420p OUT.y4m`"
+    )]
     UnsupportedPixelFormat {
         /// The format found, e.g. "Rgba8" or "C420p10".
         format: String,
@@ -66,7 +70,7 @@ pub enum Error {
     Truncated {
         /// The file or stream.
         source_name: String,
-        /// 0-based index of the incomplete frame.
+        /// The incomplete frame: its 0-based index in a stream, its frame number in a folder.
         frame: usize,
     },
     /// A malformed YUV4MPEG2 stream.

@@ -251,6 +251,11 @@ impl FrameFolder {
         })?;
         let decoded = decode_image(&bytes, path).map_err(|e| match e {
             Error::Image { path, reason } => folder_image_err(&path, reason),
+            // A lone image is frame 0 of itself; in a folder it is the frame it is named for.
+            Error::Truncated { source_name, .. } => Error::Truncated {
+                source_name,
+                frame: frame as usize,
+            },
             other => other,
         })?;
         let size = (decoded.width(), decoded.height());

@@ -617,6 +617,18 @@ fn bad_input_gets_typed_errors() {
         io::read_image(&rgba),
         Err(Error::UnsupportedPixelFormat { .. })
     ));
+    // The message says how to convert.
+    let message = io::read_image(&rgba).unwrap_err().to_string();
+    assert!(message.contains("ffmpeg -i IN -pix_fmt rgb24"), "{message}");
+    // In a folder, a truncated image is named by its frame number, not as frame 0.
+    let folder = dir.join("folder");
+    std::fs::create_dir_all(&folder).unwrap();
+    std::fs::write(folder.join("img_024.png"), &bytes).unwrap();
+    std::fs::write(folder.join("img_025.png"), &bytes[..bytes.len() / 2]).unwrap();
+    match io::FrameFolder::open(&folder).and_then(|f| f.load(25)) {
+        Err(Error::Truncated { frame: 25, .. }) => {}
+        other => panic!("{other:?}"),
+    }
     let y10 = b"YUV4MPEG2 W2 H2 F25:1 C420p10\nFRAME\n".to_vec();
     assert!(matches!(
         io::read_y4m(y10.as_slice(), "mem"),

@@ -26,7 +26,7 @@ pub(super) fn track_points(
             let map = run_chains(
                 &start,
                 settings.offline.chains,
-                settings.offline.samples(detections.len()),
+                settings.offline.samples_for(detections.len())?,
                 seed,
             )?;
             let max_gap = (settings.offline.link_gap_factor * f64::from(model.config().max_gap))

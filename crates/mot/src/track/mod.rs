@@ -559,45 +559,52 @@ pub fn track_detections_with_frames(
     seed: u64,
     frames: Option<&std::path::Path>,
 ) -> Result<(TrackSet, EffectiveConfig)> {
-    if frames.is_some() && tracker != TrackerKind::Phd {
-        return Err(Error::FramesNeedPhd {
-            tracker: tracker.name(),
-        });
-    }
     if rows.is_empty() {
         return Err(Error::NoDetections {
             what: "the input".into(),
         });
     }
-    let fused = crate::frames::FusedSettings::default();
-    let (config, rows) = match frames {
-        Some(_) => (
-            crate::frames::fused_config(settings, rows, &fused)?,
-            Cow::Borrowed(rows),
-        ),
-        None => settings.resolve_tracked(rows, tracker)?,
-    };
+    let (config, rows) = effective_config(tracker, rows, settings, frames.is_some())?;
     let tracks = match (frames, tracker) {
-        (Some(dir), _) => crate::frames::track_frames_resolved(dir, &rows, &config, &fused, seed)?,
+        (Some(dir), _) => {
+            let fused = crate::frames::FusedSettings::default();
+            crate::frames::track_frames_resolved(dir, &rows, &config, &fused, seed)?
+        }
         (None, TrackerKind::Phd) => track_boxes_phd(&rows, &config, seed)?,
         (None, _) => track_points(tracker, &rows, &config, seed)?,
     };
     Ok((tracks, config))
 }
 
+/// The configuration a run of `tracker` on `rows` uses, and the rows it tracks (GNN may drop
+/// those its scores call clutter): with `frames`, the fused PHD's (its own detection
+/// probability and threshold, [`crate::frames`]; `--tracker phd` only), else the one fitted to
+/// the file. `--print-config` shows exactly this.
+pub fn effective_config<'r>(
+    tracker: TrackerKind,
+    rows: &'r [MotRow],
+    settings: &TrackConfig,
+    frames: bool,
+) -> Result<(EffectiveConfig, Cow<'r, [MotRow]>)> {
+    if !frames {
+        return settings.resolve_tracked(rows, tracker);
+    }
+    if tracker != TrackerKind::Phd {
+        return Err(Error::FramesNeedPhd {
+            tracker: tracker.name(),
+        });
+    }
+    let fused = crate::frames::FusedSettings::default();
+    Ok((
+        crate::frames::fused_config(settings, rows, &fused)?,
+        Cow::Borrowed(rows),
+    ))
+}
+
 impl TrackConfig {
     /// Checks the tables that need no detections: `[fit]`, `[offline]`, `[boxes]`, `[scores]`.
     fn check_tables(&self) -> Result<()> {
-        if self.fit.min_track_detections < 3 {
-            return Err(invalid(
-                "min_track_detections",
-                format!(
-                    "{}; the moment estimates need at least 3",
-                    self.fit.min_track_detections
-                ),
-            ))
-            .in_table("fit");
-        }
+        self.fit.check().in_table("fit")?;
         self.offline.check().in_table("offline")?;
         self.boxes.check().in_table("boxes")?;
         self.scores.check().in_table("scores")?;
@@ -982,8 +989,35 @@ pub fn render_config(config: &EffectiveConfig, tracker: Option<TrackerKind>) -> 
     }
     Ok(out)
 }
+/// The most rounds of model fitting: each runs GNN over the whole file, and the fit settles
+/// in two or three.
+pub const MAX_FIT_ITERATIONS: usize = 20;
+
+impl FitConfig {
+    /// Checks the rounds (at most [`MAX_FIT_ITERATIONS`]) and the confident-track length (≥ 3,
+    /// the fewest detections the moment estimates can use).
+    pub fn check(&self) -> Result<()> {
+        if self.iterations > MAX_FIT_ITERATIONS {
+            return Err(invalid(
+                "iterations",
+                format!("{}; at most {MAX_FIT_ITERATIONS}", self.iterations),
+            ));
+        }
+        if self.min_track_detections < 3 {
+            return Err(invalid(
+                "min_track_detections",
+                format!(
+                    "{}; the moment estimates need at least 3",
+                    self.min_track_detections
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 impl OfflineConfig {
-    /// Checks that the chain runs at all.
+    /// Checks that the chain runs at all, with at most [`mcmcda::MAX_SAMPLES`] steps.
     pub fn check(&self) -> Result<()> {
         if self.min_samples == 0 && self.samples_per_detection == 0 {
             return Err(invalid(
@@ -991,11 +1025,25 @@ impl OfflineConfig {
                 "min_samples = samples_per_detection = 0: the chain would never move".into(),
             ));
         }
-        if !(1..=64).contains(&self.chains) {
+        if !(1..=mcmcda::MAX_CHAINS).contains(&self.chains) {
             return Err(invalid(
                 "chains",
-                format!("{}; it must be in 1..=64", self.chains),
+                format!("{}; it must be in 1..={}", self.chains, mcmcda::MAX_CHAINS),
             ));
+        }
+        for (name, samples) in [
+            ("samples_per_detection", self.samples_per_detection),
+            ("min_samples", self.min_samples),
+        ] {
+            if samples > mcmcda::MAX_SAMPLES {
+                return Err(invalid(
+                    name,
+                    format!(
+                        "{samples}; at most {} samples per chain",
+                        mcmcda::MAX_SAMPLES
+                    ),
+                ));
+            }
         }
         // At most 100 × d̄ (d̄ ≤ 64 frames): a link's bridged frames are output boxes, so the
         // factor bounds what one gap in the frame numbers can cost.
@@ -1006,6 +1054,23 @@ impl OfflineConfig {
             ));
         }
         Ok(())
+    }
+
+    /// Samples per chain for a file of `n_detections`, at most [`mcmcda::MAX_SAMPLES`].
+    pub(crate) fn samples_for(&self, n_detections: usize) -> Result<u64> {
+        let samples = self.samples(n_detections);
+        if samples > mcmcda::MAX_SAMPLES {
+            return Err(invalid(
+                "samples_per_detection",
+                format!(
+                    "{} × {n_detections} detections asks {samples} samples per chain; at most {}",
+                    self.samples_per_detection,
+                    mcmcda::MAX_SAMPLES
+                ),
+            ))
+            .in_table("offline");
+        }
+        Ok(samples)
     }
 
     /// Samples per chain: the total shared by the chains, rounded up (so no chain is left

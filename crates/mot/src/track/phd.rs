@@ -392,6 +392,17 @@ pub(super) const MAX_COAST_FRAMES: u32 = 10_000;
 impl PhdLabelConfig {
     /// Checks every field.
     pub fn check(&self) -> Result<()> {
+        // Without 1 ≤ M ≤ N no tentative track is ever confirmed, and the file would track to
+        // nothing with no word why.
+        if self.confirm_hits == 0 || self.confirm_window < self.confirm_hits {
+            return Err(crate::error::invalid(
+                "confirm_hits",
+                format!(
+                    "confirmation {} of {} needs 1 ≤ M ≤ N (confirm_hits ≤ confirm_window)",
+                    self.confirm_hits, self.confirm_window
+                ),
+            ));
+        }
         if !(0.0..=1.0).contains(&self.min_iou) {
             return Err(crate::error::invalid(
                 "min_iou",

@@ -181,6 +181,61 @@ fn zero_samples_are_an_error() {
 }
 
 #[test]
+fn huge_counts_are_errors_not_hangs() {
+    // Each ran silently with no bound before (2³² samples or rounds).
+    for (text, table, key) in [
+        (
+            "[online]\nsamples_per_scan = 4294967296\n",
+            "[online]",
+            "samples_per_scan",
+        ),
+        ("[online]\nwindow = 4294967296\n", "[online]", "window"),
+        (
+            "[offline]\nsamples_per_detection = 4294967296\n",
+            "[offline]",
+            "samples_per_detection",
+        ),
+        (
+            "[offline]\nmin_samples = 4294967296\n",
+            "[offline]",
+            "min_samples",
+        ),
+        ("[fit]\niterations = 4294967296\n", "[fit]", "iterations"),
+    ] {
+        for tracker in TrackerKind::ALL {
+            let err = error_of(text, tracker);
+            assert!(err.contains(table) && err.contains(key), "{text}: {err}");
+        }
+    }
+    // Within each bound on its own, but the file's size takes the product past it.
+    let offline = OfflineConfig {
+        samples_per_detection: 1_000_000,
+        ..OfflineConfig::default()
+    };
+    let err = offline.samples_for(10_000).unwrap_err().to_string();
+    assert!(
+        err.contains("[offline]") && err.contains("10000 detections"),
+        "{err}"
+    );
+}
+
+#[test]
+fn phd_labels_that_could_never_confirm_are_errors() {
+    // confirm_window = 0, or M > N, tracked to nothing with exit 0 before.
+    for text in [
+        "[phd_labels]\nconfirm_window = 0\n",
+        "[phd_labels]\nconfirm_hits = 6\nconfirm_window = 5\n",
+        "[phd_labels]\nconfirm_hits = 0\n",
+    ] {
+        let err = error_of(text, TrackerKind::Phd);
+        assert!(
+            err.contains("[phd_labels]") && err.contains("confirm_hits ≤ confirm_window"),
+            "{text}: {err}"
+        );
+    }
+}
+
+#[test]
 fn offline_chains_share_the_samples_rounded_up() {
     let with = |samples_per_detection, min_samples, chains| OfflineConfig {
         samples_per_detection,

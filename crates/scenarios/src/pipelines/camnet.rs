@@ -522,19 +522,73 @@ fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Resu
     })
 }
 
+/// Every count, size and range a scenario file sets, before anything is drawn: a reversed
+/// range or an empty image would panic in the generator, a huge count would run for hours.
+fn check_params(p: &Params) -> Result<()> {
+    let counts = [
+        ("n_runs", p.n_runs, 1, 1000),
+        ("n_cameras", p.n_cameras, 3, 64),
+        ("n_people", p.n_people, 1, 1000),
+        ("n_frames", p.n_frames as usize, 2, 100_000),
+        ("noise levels in noise_px", p.noise_px.len(), 1, 100),
+    ];
+    for (name, value, lo, hi) in counts {
+        anyhow::ensure!(
+            (lo..=hi).contains(&value),
+            "{name} = {value}; it must be in {lo}..={hi}"
+        );
+    }
+    let ranges = [
+        ("camera_height_m", p.camera_height_m),
+        ("person_height_m", p.person_height_m),
+    ];
+    for (name, [lo, hi]) in ranges {
+        anyhow::ensure!(
+            lo.is_finite() && hi.is_finite() && 0.0 < lo && lo < hi,
+            "{name} = [{lo}, {hi}]; it needs 0 < low < high"
+        );
+    }
+    for (name, side) in ["width", "height"].into_iter().zip(p.image_size) {
+        anyhow::ensure!(
+            (16.0..=16384.0).contains(&side),
+            "image_size's {name} is {side} px; it must be in [16, 16384]"
+        );
+    }
+    let positive = [
+        ("ring_radius_m", p.ring_radius_m),
+        ("focal_px", p.focal_px),
+        ("area_half_m", p.area_half_m),
+        ("speed_m_per_frame", p.speed_m_per_frame),
+        ("threshold_sigmas", p.threshold_sigmas),
+    ];
+    for (name, value) in positive {
+        tracker_model::ensure_positive(value, name)?;
+    }
+    tracker_model::ensure_in_range(p.false_blobs_per_frame, 0.0, 1000.0, "false_blobs_per_frame")?;
+    tracker_model::ensure_in_range(p.p_detect, 0.0, 1.0, "p_detect")?;
+    anyhow::ensure!(
+        p.noise_px.iter().all(|s| s.is_finite() && *s >= 0.0),
+        "noise_px must be finite and ≥ 0"
+    );
+    anyhow::ensure!(
+        p.noise_px.contains(&p.claim_noise_px),
+        "claim_noise_px must be in noise_px"
+    );
+    anyhow::ensure!(
+        (1..=mcmcda::MAX_SAMPLES).contains(&p.samples_per_scan),
+        "samples_per_scan = {}; it must be in 1..={}",
+        p.samples_per_scan,
+        mcmcda::MAX_SAMPLES
+    );
+    Ok(())
+}
+
 impl Pipeline for CamnetLocalisation {
     type Params = Params;
     type Output = Output;
 
     fn compute(p: &Params, rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Output> {
-        anyhow::ensure!(
-            p.n_runs >= 1 && p.n_cameras >= 3,
-            "need a run and three cameras"
-        );
-        anyhow::ensure!(
-            p.noise_px.contains(&p.claim_noise_px),
-            "claim_noise_px must be in noise_px"
-        );
+        check_params(p)?;
         let base = rng.clone();
         let tasks: Vec<(usize, f64)> = p
             .noise_px
@@ -1049,4 +1103,39 @@ fn levels(out: &Output) -> Vec<f64> {
 /// rounding.
 fn same(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-12
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The scenario's own parameters with one key replaced.
+    fn params_with(key: &str, value: toml::Value) -> Params {
+        let file: toml::Table =
+            toml::from_str(include_str!("../../../../fixtures/scenarios/camnet-people.toml"))
+                .unwrap();
+        let mut params = file["params"].as_table().unwrap().clone();
+        params.insert(key.into(), value);
+        toml::Value::Table(params).try_into().unwrap()
+    }
+
+    #[test]
+    fn bad_ranges_and_sizes_are_errors_not_panics() {
+        let pair = |a: f64, b: f64| toml::Value::Array(vec![a.into(), b.into()]);
+        assert!(check_params(&params_with("n_runs", 2.into())).is_ok());
+        // Each panicked ("cannot sample empty range") or ran without bound before.
+        for (key, value) in [
+            ("camera_height_m", pair(6.0, 3.5)),
+            ("person_height_m", pair(1.9, 1.9)),
+            ("image_size", pair(0.0, 0.0)),
+            ("image_size", pair(1e300, 720.0)),
+            ("n_frames", 4_294_967_295_i64.into()),
+            ("n_people", 0.into()),
+            ("samples_per_scan", 4_294_967_296_000_i64.into()),
+        ] {
+            let err = check_params(&params_with(key, value.clone())).unwrap_err();
+            let name = key.split('_').next().unwrap();
+            assert!(format!("{err:#}").contains(name), "{key} = {value}: {err:#}");
+        }
+    }
 }
