@@ -11,6 +11,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 mod ci;
+mod data;
 mod eval;
 mod fuzz;
 mod junit;
@@ -89,7 +90,7 @@ enum Command {
         #[arg(long, required_unless_present = "print_config")]
         tracker: Option<mot::track::TrackerKind>,
         /// Detections (frame,id,left,top,width,height,conf,...).
-        #[arg(long, required_unless_present = "print_config")]
+        #[arg(long, required_unless_present_any = ["print_config", "video"])]
         input: Option<PathBuf>,
         /// Where to write the tracks.
         #[arg(long, required_unless_present = "print_config")]
@@ -118,6 +119,23 @@ enum Command {
         /// per target (image-detector), as in the phd-images scenarios.
         #[arg(long)]
         frames: Option<PathBuf>,
+        /// A folder of the video's frames to detect in: the review's camera pipeline
+        /// (background mixture with shadow removal, cleaned mask, blobs) makes the detections
+        /// instead of --input, and any tracker follows them; with --tracker phd the image
+        /// local detectors are fused on the same frames.
+        #[arg(long, conflicts_with = "input")]
+        video: Option<PathBuf>,
+        /// The frame number of the first image of --video or --frames (default: the numbers in
+        /// the file names). MOTChallenge frames start at 1.
+        #[arg(long)]
+        first_frame: Option<u32>,
+        /// Write the frames of --video or --frames with the tracks drawn (boxes and ids) as PNG
+        /// files to this folder.
+        #[arg(long)]
+        overlay: Option<PathBuf>,
+        /// With --video: also write the detections made as MOTChallenge text to this file.
+        #[arg(long, requires = "video")]
+        detections_out: Option<PathBuf>,
     },
     /// Write a realistic pedestrian sequence (mot::walkers): OUT-det.txt (detections
     /// with scores) and OUT-gt.txt (ground truth), MOTChallenge text.
@@ -134,6 +152,13 @@ enum Command {
         /// Path prefix of the two files.
         #[arg(long)]
         out: PathBuf,
+    },
+    /// Fetch real data that is not committed into a cache outside the repository
+    /// ($TRACKING_DATA_DIR, else ~/.cache/tracking-toolkit). vtest: OpenCV's pedestrian video
+    /// from Debian's opencv-doc package, frames 300-794 decoded to PNG by ffmpeg.
+    FetchData {
+        /// The data set: vtest.
+        name: String,
     },
     /// Score a tracker's MOTChallenge output against MOTChallenge ground truth.
     Eval {
@@ -190,6 +215,10 @@ fn main() -> ExitCode {
             print_config,
             online,
             frames,
+            video,
+            first_frame,
+            overlay,
+            detections_out,
         } => track::run(&track::Request {
             tracker: match (tracker, online) {
                 (Some(mot::track::TrackerKind::Mcmcda), true) => {
@@ -206,7 +235,12 @@ fn main() -> ExitCode {
             seed,
             print_config,
             frames: frames.as_deref(),
+            video: video.as_deref(),
+            first_frame,
+            overlay: overlay.as_deref(),
+            detections_out: detections_out.as_deref(),
         }),
+        Command::FetchData { name } => data::run(&name),
         Command::Walkers {
             seed,
             fps,

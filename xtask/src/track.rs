@@ -6,11 +6,14 @@ use std::fs;
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
+use mot::frames::FusedSettings;
 use mot::text::read_detections;
 use mot::track::{
     TrackConfig, TrackerKind, effective_config, empty_output_warning, render_config,
     track_detections_with_frames,
 };
+use mot::video::{self, VideoDetectorConfig};
+use sensors_video::io::FrameFolder;
 use tracker_model::{MotRow, format_mot};
 
 use crate::{Outcome, read_file};
@@ -51,6 +54,44 @@ pub struct Request<'a> {
     pub print_config: bool,
     /// A folder of frames: run the PHD tracker fused with image local detectors on them.
     pub frames: Option<&'a Path>,
+    /// A folder of frames to detect in by background subtraction (instead of `input`); with
+    /// the PHD tracker, also the frames its local detectors search.
+    pub video: Option<&'a Path>,
+    /// The frame number of the first image of `frames` or `video`.
+    pub first_frame: Option<u32>,
+    /// Where to write the frames with the tracks drawn (PNG).
+    pub overlay: Option<&'a Path>,
+    /// Where to write the detections made from `video`.
+    pub detections_out: Option<&'a Path>,
+}
+
+impl Request<'_> {
+    /// The frame folder given, `--video` or `--frames`.
+    fn folder(&self) -> Option<&Path> {
+        self.video.or(self.frames)
+    }
+
+    /// The fused tracker's settings when a folder is given to the PHD tracker.
+    fn fused(&self) -> Option<FusedSettings> {
+        let fused =
+            self.frames.is_some() || self.video.is_some() && self.tracker == Some(TrackerKind::Phd);
+        fused.then(|| FusedSettings {
+            first_frame: self.first_frame,
+            ..FusedSettings::default()
+        })
+    }
+
+    /// The folder, opened and renumbered as asked.
+    fn open_folder(&self) -> Result<Option<FrameFolder>> {
+        let Some(dir) = self.folder() else {
+            return Ok(None);
+        };
+        let folder = FrameFolder::open(dir)?;
+        Ok(Some(match self.first_frame {
+            Some(first) => folder.renumbered(first)?,
+            None => folder,
+        }))
+    }
 }
 
 /// Runs the command.
@@ -65,17 +106,86 @@ pub fn run(req: &Request<'_>) -> Outcome {
         print!("{}", config_text(req, &settings)?);
         return Ok(true);
     }
-    let (Some(tracker), Some(input), Some(out)) = (req.tracker, req.input, req.out) else {
-        bail!("track needs --tracker, --input and --out (or --print-config)");
+    let (Some(tracker), Some(out)) = (req.tracker, req.out) else {
+        bail!("track needs --tracker, --input (or --video) and --out (or --print-config)");
     };
-    let rows = read_input(input)?;
+    let rows = detections(req)?;
     let start = std::time::Instant::now();
+    let fused = req.fused();
+    let frames = req.folder().zip(fused.as_ref());
     let (set, effective) =
-        track_detections_with_frames(tracker, &rows, &settings, req.seed, req.frames)?;
+        track_detections_with_frames(tracker, &rows, &settings, req.seed, frames)?;
     let elapsed = start.elapsed().as_secs_f64();
     if let Some(warning) = empty_output_warning(tracker, &rows, &effective, &set) {
         eprintln!("warning: {warning}");
     }
+    write_tracks(&set, out)?;
+    let frames: std::collections::BTreeSet<u32> = rows.iter().map(|r| r.frame).collect();
+    println!(
+        "{tracker}: {} tracks ({} boxes) from {} detections in {} frames written to {}; {}; \
+         {:.3} ms per frame",
+        set.len(),
+        set.n_points(),
+        rows.len(),
+        frames.len(),
+        out.display(),
+        fitted_summary(tracker, &effective),
+        1e3 * elapsed / frames.len().max(1) as f64
+    );
+    if let Some(overlay) = req.overlay {
+        let Some(folder) = req.open_folder()? else {
+            bail!("--overlay draws on the frames of --video or --frames; give one");
+        };
+        let written = video::write_overlay(&folder, &set, overlay, &mut every_50th("overlay"))?;
+        println!(
+            "{written} frames with the tracks drawn written to {}",
+            overlay.display()
+        );
+    }
+    Ok(true)
+}
+
+/// The detections: `--input`'s, or those made from `--video`'s frames (written to
+/// `--detections-out` when asked).
+#[expect(clippy::print_stderr, reason = "progress of the detector")]
+fn detections(req: &Request<'_>) -> Result<Vec<MotRow>> {
+    match (req.input, req.video) {
+        (Some(input), None) => read_input(input),
+        (None, Some(dir)) => {
+            let folder = req.open_folder()?.context("--video needs a folder")?;
+            let config = VideoDetectorConfig::default();
+            eprintln!(
+                "detecting in {} frames of {} (background mixture, {} warm-up frames)",
+                folder.len(),
+                dir.display(),
+                config.warmup_frames
+            );
+            let rows = video::detect_folder(&folder, &config, &mut every_50th("detected"))?;
+            if let Some(path) = req.detections_out {
+                fs::write(path, format_mot(&rows))
+                    .with_context(|| format!("cannot write {}", path.display()))?;
+            }
+            Ok(rows)
+        }
+        (Some(_), Some(_)) => bail!("give --input or --video, not both"),
+        (None, None) => bail!("track needs --input (a detection file) or --video (frames)"),
+    }
+}
+
+/// A progress callback that prints a line every 50 frames (a pipe shows it too).
+#[expect(clippy::print_stderr, reason = "progress on the terminal")]
+fn every_50th(what: &'static str) -> impl FnMut(u32) {
+    let mut n = 0u64;
+    move |frame| {
+        n += 1;
+        if n.is_multiple_of(50) {
+            eprintln!("  {what} {n} frames (frame {frame})");
+        }
+    }
+}
+
+/// Writes the tracks as MOTChallenge text, boxes rounded to a thousandth of a pixel.
+fn write_tracks(set: &tracker_model::TrackSet, out: &Path) -> Result<()> {
     let mut boxes = set.to_mot_rows(0.0);
     for row in &mut boxes {
         // Smoothing leaves float noise in the last digits (28.359999999999978); a thousandth
@@ -89,33 +199,24 @@ pub fn run(req: &Request<'_>) -> Outcome {
             *v = (*v * 1e3).round() / 1e3;
         }
     }
-    fs::write(out, format_mot(&boxes))
-        .with_context(|| format!("cannot write {}", out.display()))?;
-    let frames: std::collections::BTreeSet<u32> = rows.iter().map(|r| r.frame).collect();
-    println!(
-        "{tracker}: {} tracks ({} boxes) from {} detections in {} frames written to {}; {}; \
-         {:.3} ms per frame",
-        set.len(),
-        set.n_points(),
-        rows.len(),
-        frames.len(),
-        out.display(),
-        fitted_summary(tracker, &effective),
-        1e3 * elapsed / frames.len().max(1) as f64
-    );
-    Ok(true)
+    fs::write(out, format_mot(&boxes)).with_context(|| format!("cannot write {}", out.display()))
 }
 
 /// The configuration `--print-config` prints: what the run would use, `--frames` included
 /// (which implies the PHD tracker when none is named).
 fn config_text(req: &Request<'_>, settings: &TrackConfig) -> Result<String> {
-    let rows = req.input.map(read_input).transpose()?.unwrap_or_default();
+    let rows = if req.input.is_some() || req.video.is_some() {
+        detections(req)?
+    } else {
+        Vec::new()
+    };
     let tracker = match (req.tracker, req.frames) {
         (None, Some(_)) => Some(TrackerKind::Phd),
         (tracker, _) => tracker,
     };
+    let fused = req.fused();
     let effective = match tracker {
-        Some(tracker) => effective_config(tracker, &rows, settings, req.frames.is_some())?.0,
+        Some(tracker) => effective_config(tracker, &rows, settings, fused.as_ref())?.0,
         None => settings.resolve(&rows)?,
     };
     Ok(render_config(&effective, tracker)?)
@@ -211,6 +312,10 @@ mod tests {
             seed: 1,
             print_config: true,
             frames,
+            video: None,
+            first_frame: None,
+            overlay: None,
+            detections_out: None,
         };
         let settings = TrackConfig::default();
         let plain = config_text(&request(None), &settings).unwrap();

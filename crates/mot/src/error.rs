@@ -111,6 +111,18 @@ pub enum Error {
         /// The folder.
         dir: PathBuf,
     },
+    /// A frame folder whose images count from 0 against detections that count from 1.
+    #[error(
+        "the images of {} are numbered from 0 (their file names) but the detections from 1, so \
+         each image would get the next frame's detections; MOTChallenge frames start at 1: pass \
+         --first-frame 1 (FusedSettings::first_frame) to number the first image 1, or \
+         --first-frame 0 if the names are right",
+        dir.display()
+    )]
+    ImagesFromZero {
+        /// The folder.
+        dir: PathBuf,
+    },
     /// An output frame past the last representable frame number.
     #[error(
         "an output frame {frame} is beyond the largest frame number {}",

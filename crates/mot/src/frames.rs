@@ -55,6 +55,10 @@ pub struct FusedSettings {
     /// this path was built and tested with. The 0.3 of `--tracker phd` was tuned for the
     /// filter on global detections alone, whose p_D is lower.
     pub extraction_threshold: f64,
+    /// The frame number of the folder's first image ([`FrameFolder::renumbered`]); unset, the
+    /// numbers in the file names, and images counted from 0 against detections counted from
+    /// 1 are an [`Error::ImagesFromZero`].
+    pub first_frame: Option<u32>,
 }
 
 impl Default for FusedSettings {
@@ -64,6 +68,7 @@ impl Default for FusedSettings {
             detector: DetectorConfig::default(),
             p_detect: FUSED_P_DETECT,
             extraction_threshold: phd_filter::PhdConfig::default().extraction_threshold,
+            first_frame: None,
         }
     }
 }
@@ -133,8 +138,13 @@ impl FusedPhd {
     /// The folder's images listed and their sizes checked ([`FrameFolder::open`]); the filter
     /// draws from `seed`, the local detectors from a seed drawn from it.
     pub fn open(dir: &Path, filter: PhdConfig, fused: FusedSettings, seed: u64) -> Result<Self> {
+        let folder = FrameFolder::open(dir)?;
+        let folder = match fused.first_frame {
+            Some(first) => folder.renumbered(first)?,
+            None => folder,
+        };
         Ok(Self {
-            folder: FrameFolder::open(dir)?,
+            folder,
             filter,
             fused,
             seed,
@@ -151,7 +161,7 @@ impl BatchTracker for FusedPhd {
         if scans.is_empty() {
             return Ok(TrackSet::new());
         }
-        check_detections(&self.folder, scans)?;
+        check_detections(&self.folder, scans, self.fused.first_frame.is_some())?;
         let by_frame: BTreeMap<Frame, Vec<BoundingBox>> = scans
             .iter()
             .map(|s| Ok((s.frame, boxes_of(&s.detections)?)))
@@ -188,8 +198,16 @@ fn boxes_of(detections: &[Detection]) -> Result<Vec<BoundingBox>> {
         .collect::<tracker_model::Result<_>>()?)
 }
 
-/// Checks that every frame of `scans` has an image in `folder`.
-fn check_detections(folder: &FrameFolder, scans: &[FrameDetections]) -> Result<()> {
+/// Checks that every frame of `scans` has an image in `folder`, and, unless the numbering was
+/// `given`, that the images do not count from 0 where the detections count from 1 (each image
+/// would get the next frame's detections, with no other sign that anything is wrong).
+fn check_detections(folder: &FrameFolder, scans: &[FrameDetections], given: bool) -> Result<()> {
+    let first_scan = scans.first().map(|s| s.frame);
+    if !given && folder.first() == Some(0) && first_scan == Some(1) {
+        return Err(Error::ImagesFromZero {
+            dir: folder.dir().to_path_buf(),
+        });
+    }
     let without: Vec<Frame> = scans
         .iter()
         .map(|s| s.frame)
@@ -306,6 +324,31 @@ mod tests {
             matches!(&err, Error::Frames(sensors_video::Error::EmptySequence { path }) if path == &dir),
             "{err}"
         );
+        std::fs::remove_dir_all(dir).unwrap();
+    }
+
+    #[test]
+    fn images_from_zero_against_detections_from_one_are_named_unless_numbered() {
+        let dir = temp_dir("from_zero");
+        for f in 0..3 {
+            let name = format!("vtest_{f:03}.png");
+            sensors_video::io::write_image(&grey(32, 24), &dir.join(name)).unwrap();
+        }
+        let rows = [det(1, a_box()), det(2, a_box())];
+        // Every detection frame has an image, so nothing else would have said so.
+        let err = error_of(&dir, &rows);
+        assert!(
+            matches!(&err, Error::ImagesFromZero { dir: d } if d == &dir),
+            "{err}"
+        );
+        assert!(err.to_string().contains("--first-frame 1"), "{err}");
+        for first_frame in [0, 1] {
+            let fused = FusedSettings {
+                first_frame: Some(first_frame),
+                ..FusedSettings::default()
+            };
+            track_frames(&dir, &rows, &TrackConfig::default(), &fused, 0).unwrap();
+        }
         std::fs::remove_dir_all(dir).unwrap();
     }
 

@@ -12,6 +12,8 @@
 //!   label-based track management ([`track::track_detections`]); output boxes fitted to each
 //!   track's detections ([`track::smooth_boxes`]).
 //! * [`frames`]: the PHD fused with image local detectors on a folder of frames.
+//! * [`video`]: detections from a folder of frames by background subtraction, and tracks
+//!   drawn back on the frames.
 //! * [`driver`]: any tracker of tracker-model's one interface ([`tracker_model::Tracker`],
 //!   [`tracker_model::BatchTracker`]) on detections, with [`track::FileTracker`] the file
 //!   trackers above behind the same interface.
@@ -31,14 +33,16 @@
 //! ```
 //!
 //! Library code here reads no file and touches neither the clock nor the terminal, except
-//! [`frames`], which reads the frame folder it is given through sensors-video's
-//! `FrameFolder`. Errors are the one typed [`Error`].
+//! [`frames`] and [`video`], which read the frame folder they are given through
+//! sensors-video's `FrameFolder` (and [`video::write_overlay`], which writes the frames it
+//! draws). Errors are the one typed [`Error`].
 
 pub mod driver;
 mod error;
 pub mod frames;
 pub mod text;
 pub mod track;
+pub mod video;
 pub mod walkers;
 
 pub use error::{Error, Result};

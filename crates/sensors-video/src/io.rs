@@ -209,6 +209,36 @@ impl FrameFolder {
         })
     }
 
+    /// The folder with its frames renumbered so that the first image is frame `first` (the
+    /// others keep their distance from it): for names that count from 0 against detections
+    /// that count from 1, or names that are not frame numbers at all.
+    pub fn renumbered(mut self, first: u32) -> Result<Self> {
+        let (Some(&lo), Some(&hi)) = (self.frames.keys().next(), self.frames.keys().last()) else {
+            return Ok(self);
+        };
+        let shift = i64::from(first) - i64::from(lo);
+        if i64::from(hi) + shift > i64::from(u32::MAX) {
+            return Err(tracker_model::Error::InvalidParameter {
+                name: "first_frame",
+                reason: format!(
+                    "{first} takes the last image (frame {hi}) past frame number {}",
+                    u32::MAX
+                ),
+            }
+            .into());
+        }
+        self.frames = std::mem::take(&mut self.frames)
+            .into_iter()
+            .map(|(frame, path)| ((i64::from(frame) + shift) as u32, path))
+            .collect();
+        Ok(self)
+    }
+
+    /// The first frame number, if there is an image.
+    pub fn first(&self) -> Option<u32> {
+        self.frames.keys().next().copied()
+    }
+
     /// The folder.
     pub fn dir(&self) -> &Path {
         &self.dir

@@ -15,6 +15,7 @@
 //!   (writable as [`tracker_model::MotRow`]); [`DetectionFilter`]: the paper's persistent
 //!   background suppression and spike removal on the detection function;
 //! * [`PinholeCamera`] and [`AngleProfiler`]: pixels to bearings, masks to profiles;
+//! * [`overlay`]: tracks drawn on frames (outlines and ids), for looking at a tracker's output;
 //! * [`render`]: a seeded scene renderer with truth masks, shadows and boxes, for tests;
 //! * [`sprites`]: people-like textured sprites walking in given boxes over clutter, for
 //!   image-based local detectors.
@@ -46,6 +47,7 @@ mod error;
 mod frame;
 pub mod io;
 pub mod mog;
+pub mod overlay;
 pub mod post;
 pub mod render;
 pub mod sprites;

@@ -629,6 +629,23 @@ fn bad_input_gets_typed_errors() {
         Err(Error::Truncated { frame: 25, .. }) => {}
         other => panic!("{other:?}"),
     }
+    // Renumbered, the same images are frames 1 and 2 (and the truncated one is named so).
+    let renumbered = io::FrameFolder::open(&folder)
+        .unwrap()
+        .renumbered(1)
+        .unwrap();
+    assert_eq!(renumbered.frames().collect::<Vec<_>>(), [1, 2]);
+    assert!(renumbered.load(1).is_ok());
+    assert!(matches!(
+        renumbered.load(2),
+        Err(Error::Truncated { frame: 2, .. })
+    ));
+    assert!(
+        io::FrameFolder::open(&folder)
+            .unwrap()
+            .renumbered(u32::MAX)
+            .is_err()
+    );
     let y10 = b"YUV4MPEG2 W2 H2 F25:1 C420p10\nFRAME\n".to_vec();
     assert!(matches!(
         io::read_y4m(y10.as_slice(), "mem"),

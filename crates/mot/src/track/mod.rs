@@ -557,18 +557,17 @@ pub fn track_detections_with_frames(
     rows: &[MotRow],
     settings: &TrackConfig,
     seed: u64,
-    frames: Option<&std::path::Path>,
+    frames: Option<(&std::path::Path, &crate::frames::FusedSettings)>,
 ) -> Result<(TrackSet, EffectiveConfig)> {
     if rows.is_empty() {
         return Err(Error::NoDetections {
             what: "the input".into(),
         });
     }
-    let (config, rows) = effective_config(tracker, rows, settings, frames.is_some())?;
+    let (config, rows) = effective_config(tracker, rows, settings, frames.map(|f| f.1))?;
     let tracks = match (frames, tracker) {
-        (Some(dir), _) => {
-            let fused = crate::frames::FusedSettings::default();
-            crate::frames::track_frames_resolved(dir, &rows, &config, &fused, seed)?
+        (Some((dir, fused)), _) => {
+            crate::frames::track_frames_resolved(dir, &rows, &config, fused, seed)?
         }
         (None, TrackerKind::Phd) => track_boxes_phd(&rows, &config, seed)?,
         (None, _) => track_points(tracker, &rows, &config, seed)?,
@@ -577,26 +576,25 @@ pub fn track_detections_with_frames(
 }
 
 /// The configuration a run of `tracker` on `rows` uses, and the rows it tracks (GNN may drop
-/// those its scores call clutter): with `frames`, the fused PHD's (its own detection
+/// those its scores call clutter): with `fused` settings (a frame folder), the fused PHD's (its own detection
 /// probability and threshold, [`crate::frames`]; `--tracker phd` only), else the one fitted to
 /// the file. `--print-config` shows exactly this.
 pub fn effective_config<'r>(
     tracker: TrackerKind,
     rows: &'r [MotRow],
     settings: &TrackConfig,
-    frames: bool,
+    fused: Option<&crate::frames::FusedSettings>,
 ) -> Result<(EffectiveConfig, Cow<'r, [MotRow]>)> {
-    if !frames {
+    let Some(fused) = fused else {
         return settings.resolve_tracked(rows, tracker);
-    }
+    };
     if tracker != TrackerKind::Phd {
         return Err(Error::FramesNeedPhd {
             tracker: tracker.name(),
         });
     }
-    let fused = crate::frames::FusedSettings::default();
     Ok((
-        crate::frames::fused_config(settings, rows, &fused)?,
+        crate::frames::fused_config(settings, rows, fused)?,
         Cow::Borrowed(rows),
     ))
 }

@@ -564,7 +564,12 @@ fn check_params(p: &Params) -> Result<()> {
     for (name, value) in positive {
         tracker_model::ensure_positive(value, name)?;
     }
-    tracker_model::ensure_in_range(p.false_blobs_per_frame, 0.0, 1000.0, "false_blobs_per_frame")?;
+    tracker_model::ensure_in_range(
+        p.false_blobs_per_frame,
+        0.0,
+        1000.0,
+        "false_blobs_per_frame",
+    )?;
     tracker_model::ensure_in_range(p.p_detect, 0.0, 1.0, "p_detect")?;
     anyhow::ensure!(
         p.noise_px.iter().all(|s| s.is_finite() && *s >= 0.0),
@@ -1111,9 +1116,10 @@ mod tests {
 
     /// The scenario's own parameters with one key replaced.
     fn params_with(key: &str, value: toml::Value) -> Params {
-        let file: toml::Table =
-            toml::from_str(include_str!("../../../../fixtures/scenarios/camnet-people.toml"))
-                .unwrap();
+        let file: toml::Table = toml::from_str(include_str!(
+            "../../../../fixtures/scenarios/camnet-people.toml"
+        ))
+        .unwrap();
         let mut params = file["params"].as_table().unwrap().clone();
         params.insert(key.into(), value);
         toml::Value::Table(params).try_into().unwrap()
@@ -1135,7 +1141,10 @@ mod tests {
         ] {
             let err = check_params(&params_with(key, value.clone())).unwrap_err();
             let name = key.split('_').next().unwrap();
-            assert!(format!("{err:#}").contains(name), "{key} = {value}: {err:#}");
+            assert!(
+                format!("{err:#}").contains(name),
+                "{key} = {value}: {err:#}"
+            );
         }
     }
 }
