@@ -56,9 +56,56 @@ pub enum Error {
     /// An error from the audio crate (building reports from beamforms).
     #[error(transparent)]
     Audio(#[from] sensors_audio::Error),
-    /// An error from the video crate (building nodes from cameras).
+    /// An error from the video crate (building nodes from cameras, rendering the road scene).
     #[error(transparent)]
     Video(#[from] sensors_video::Error),
+    /// An error scoring tracks against the truth (the road scene's runs).
+    #[error(transparent)]
+    Eval(#[from] eval_metrics::Error),
+    /// A search's seeds hold the seed whose runs are reported.
+    #[error("{table}: the seeds hold the reported seed {seed}")]
+    ReportedSeed {
+        /// The parameter table whose seeds they are.
+        table: &'static str,
+        /// The reported seed.
+        seed: u64,
+    },
+    /// A peak-score table is keyed by a name that is not one of the road scene's approaches.
+    #[error("[params.multi_peak_scores]: unknown approach {name} (one of {known})")]
+    UnknownApproach {
+        /// The key.
+        name: String,
+        /// The approaches' keys, comma-separated.
+        known: String,
+    },
+    /// A list of approaches names something other than `all` or an approach index.
+    #[error("{given:?} is not `all` or an approach index 0..{n_approaches}")]
+    ApproachIndex {
+        /// The list's item.
+        given: String,
+        /// The number of approaches.
+        n_approaches: usize,
+    },
+    /// An approach is scored but has no peak-score table.
+    #[error("approach {approach} is scored but [params.multi_peak_scores] has no {approach}")]
+    MissingPeakScores {
+        /// The approach's key.
+        approach: String,
+    },
+    /// An approach's peak-score table fails its check.
+    #[error("[params.multi_peak_scores.{approach}]: {source}")]
+    PeakScoreTable {
+        /// The approach's key.
+        approach: String,
+        /// What is wrong with the table.
+        source: Box<Error>,
+    },
+    /// A search stage has no candidates.
+    #[error("an empty {stage} grid")]
+    EmptyGrid {
+        /// The stage.
+        stage: &'static str,
+    },
 }
 
 /// Result with [`Error`].

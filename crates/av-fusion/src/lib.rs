@@ -23,7 +23,12 @@
 //!   a time by explaining away ([`PeakExtraction::explain_away_deg`]);
 //! * [`AvPipeline`] / [`track_reports`]: the peak lists through
 //!   [`mcmcda::OnlineTracker`] into a [`tracker_model::TrackSet`] whose frames are the ticks,
-//!   optionally with each peak's contrast as a detection score ([`PeakScores`]).
+//!   optionally with each peak's contrast as a detection score ([`PeakScores`]);
+//! * [`scene`]: Table 1's road (Kushwaha et al. 2008) with simulated acoustic nodes and
+//!   cameras, the six approaches (audio, video, audio+video × weighted sum, floored product)
+//!   and each one scored on a simulated run against the truth;
+//! * [`tuning`]: the searches on tuning seeds behind the road scene's settings and peak-score
+//!   tables, their lines sent to the caller's [`tuning::Log`].
 //!
 //! One tick of the fusion node on your nodes' reports: three microphone arrays with 8 beams each
 //! (beam i points i × 45° from +x) report their beam energies at 0 s, and the floored product
@@ -133,7 +138,9 @@ mod buffer;
 mod error;
 mod fusion;
 mod node;
+pub mod scene;
 mod tracker;
+pub mod tuning;
 
 #[cfg(test)]
 mod tests;

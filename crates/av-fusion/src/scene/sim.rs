@@ -3,22 +3,41 @@
 //! background mixture, and the truth. The sensors never read the truth to decide what to
 //! report: they see only the simulated signals and images.
 
-use super::*;
+use std::f64::consts::PI;
+
+use rand::RngExt;
+use rand_chacha::ChaCha8Rng;
+use sensors_audio::{
+    BackgroundNoise, EnergyScaling, MicArray, NoiseField, SimulationConfig, Source, SourcePath,
+    SourceSignal, simulate,
+};
+use sensors_video::{
+    AngleProfiler, BackgroundModel, DetectionFilter, ObjectKind, PinholeCamera, PixelFormat, Scene,
+    SceneConfig, SceneObject, clean,
+};
+use tracker_model::{Frame, SensorPose, Track, TrackId, TrackPoint, TrackSet, Vec2};
+
+use super::{LANE_OFFSET_M, Params, REGION_M, ROAD_Y_M, VideoParams, region};
+use crate::{Report, Result};
 
 /// A vehicle's straight path: position at run time t.
 #[derive(Debug, Clone, Copy)]
-pub(super) struct Vehicle {
-    pub(super) start: Vec2,
-    pub(super) velocity: Vec2,
+pub struct Vehicle {
+    /// Position at run time 0, m (outside the region until it enters).
+    pub start: Vec2,
+    /// Velocity, m/s.
+    pub velocity: Vec2,
 }
 
 impl Vehicle {
-    pub(super) fn at(&self, t: f64) -> Vec2 {
+    /// Position at run time `t`, s.
+    pub fn at(&self, t: f64) -> Vec2 {
         self.start + self.velocity * t
     }
 
-    /// Enters the region at `enter_s` going `direction` at `speed` m/s.
-    pub(super) fn new(speed_mps: f64, direction: i8, enter_s: f64) -> Self {
+    /// Enters the region at `enter_s` going `direction` (+1: along +x on the lower lane; −1:
+    /// along −x on the upper lane) at `speed_mps` m/s.
+    pub fn new(speed_mps: f64, direction: i8, enter_s: f64) -> Self {
         let dir = if direction >= 0 { 1.0 } else { -1.0 };
         let y = ROAD_Y_M - dir * LANE_OFFSET_M;
         let x_enter = if dir > 0.0 { 0.0 } else { REGION_M[0] };
@@ -31,12 +50,15 @@ impl Vehicle {
 }
 
 /// One run's inputs: the vehicles and how long it lasts.
-pub(super) struct RunSpec {
-    pub(super) vehicles: Vec<Vehicle>,
-    pub(super) duration_s: f64,
+pub struct RunSpec {
+    /// The vehicles.
+    pub vehicles: Vec<Vehicle>,
+    /// Seconds from the start of the run to its end.
+    pub duration_s: f64,
 }
 
-pub(super) fn audio_poses() -> Vec<SensorPose> {
+/// The six acoustic nodes' true poses, three either side of the road.
+pub fn audio_poses() -> Vec<SensorPose> {
     [
         (5.0, 4.0),
         (17.5, 4.0),
@@ -56,7 +78,7 @@ pub(super) fn audio_poses() -> Vec<SensorPose> {
 
 /// Three cameras at an angle to the road: two at the near corners looking along it, one on
 /// the far side looking across and down the road.
-pub(super) fn cameras(v: &VideoParams) -> Vec<PinholeCamera> {
+pub fn cameras(v: &VideoParams) -> Vec<PinholeCamera> {
     [(1.0, 1.0, 35.0), (34.0, 1.0, 145.0), (8.0, 19.5, -55.0)]
         .iter()
         .map(|&(x, y, h)| PinholeCamera {
@@ -75,17 +97,14 @@ pub(super) fn cameras(v: &VideoParams) -> Vec<PinholeCamera> {
 
 /// Known clock offsets of the nodes (each node's clock runs ahead by this much; the fusion
 /// node knows it from synchronisation).
-pub(super) fn clock_offset_s(i: usize) -> f64 {
+pub fn clock_offset_s(i: usize) -> f64 {
     0.37 * i as f64 - 1.1
 }
 
-pub(super) fn audio_reports(
-    p: &Params,
-    run: &RunSpec,
-    rng: &mut ChaCha8Rng,
-) -> Result<Vec<Report>> {
+/// The acoustic nodes' reports of a run: each node's beamforms of its simulated recording.
+fn audio_reports(p: &Params, run: &RunSpec, rng: &mut ChaCha8Rng) -> Result<Vec<Report>> {
     let array = MicArray::default();
-    // `compute` checked that a multi-vehicle beamformer keeps the beams and sample rate.
+    // `check_params` checks that a multi-vehicle beamformer keeps the beams and sample rate.
     let beamform = match &p.audio.multi_beamform {
         Some(multi) if run.vehicles.len() > 1 => multi,
         _ => &p.audio.beamform,
@@ -135,11 +154,9 @@ pub(super) fn audio_reports(
     Ok(reports)
 }
 
-pub(super) fn video_reports(
-    p: &Params,
-    run: &RunSpec,
-    rng: &mut ChaCha8Rng,
-) -> Result<Vec<Report>> {
+/// The cameras' reports of a run: each camera's filtered angle profiles of the foreground of
+/// its rendered frames, after a warm-up for the background model.
+fn video_reports(p: &Params, run: &RunSpec, rng: &mut ChaCha8Rng) -> Result<Vec<Report>> {
     let v = &p.video;
     let period = 1.0 / v.fps;
     let warm_s = v.warmup_frames as f64 * period;
@@ -201,7 +218,7 @@ pub(super) fn video_reports(
 }
 
 /// Each vehicle's positions at the ticks it is inside the region.
-pub(super) fn truth(run: &RunSpec, p: &Params, n_ticks: u64) -> Result<TrackSet> {
+fn truth(run: &RunSpec, p: &Params, n_ticks: u64) -> Result<TrackSet> {
     let mut set = TrackSet::new();
     for (i, v) in run.vehicles.iter().enumerate() {
         let points: Vec<TrackPoint> = (0..n_ticks)
@@ -217,26 +234,28 @@ pub(super) fn truth(run: &RunSpec, p: &Params, n_ticks: u64) -> Result<TrackSet>
 }
 
 /// Every report of a run: the acoustic nodes' beamforms and the cameras' angle profiles.
-pub(super) fn simulate_reports(
-    p: &Params,
-    run: &RunSpec,
-    rng: &mut ChaCha8Rng,
-) -> Result<Vec<Report>> {
+fn simulate_reports(p: &Params, run: &RunSpec, rng: &mut ChaCha8Rng) -> Result<Vec<Report>> {
     let mut reports = audio_reports(p, run, rng)?;
     reports.extend(video_reports(p, run, rng)?);
     Ok(reports)
 }
 
 /// A run's simulated inputs: its reports, its length in ticks and the truth.
-pub(super) struct Simulated {
+pub struct Simulated {
     /// More than one vehicle (the run takes the multi-vehicle settings).
-    pub(super) multi: bool,
-    pub(super) reports: Vec<Report>,
-    pub(super) n_ticks: u64,
-    pub(super) gt: TrackSet,
+    pub multi: bool,
+    /// Every report: the acoustic nodes' beamforms, then the cameras' angle profiles, each
+    /// stamped with its node's clock.
+    pub reports: Vec<Report>,
+    /// Ticks of the scheduler over the run.
+    pub n_ticks: u64,
+    /// Each vehicle's positions at the ticks it is inside the region, one track per vehicle.
+    pub gt: TrackSet,
 }
 
-pub(super) fn simulate_run(p: &Params, run: &RunSpec, rng: &mut ChaCha8Rng) -> Result<Simulated> {
+/// Simulates run `run`: the reports of every node (drawing from `rng`: the vehicles' engine
+/// notes and colours, the noise and the scenes' clutter) and the truth.
+pub fn simulate_run(p: &Params, run: &RunSpec, rng: &mut ChaCha8Rng) -> Result<Simulated> {
     let reports = simulate_reports(p, run, rng)?;
     let n_ticks = (run.duration_s * p.scheduler.rate_hz).floor() as u64;
     let gt = truth(run, p, n_ticks)?;

@@ -1,0 +1,570 @@
+//! The road scene of Kushwaha, Oh, Amundson, Koutsoukos & Ledeczi (MFI 2008, Table 1 and
+//! Figs. 7–11; reviewed in Oh 2012, §V): a 35 × 20 m region in 0.5 m cells, six acoustic nodes
+//! (36 beams) and three cameras (160 angles) either side of a two-lane road, and vehicles
+//! passing on it.
+//!
+//! * [`Params`]: the scene and the six approaches' settings, as deserialised from a
+//!   configuration's `[params]` table (unknown fields are rejected);
+//! * [`APPROACHES`]: audio, video and audio+video, each fused by the weighted sum or the
+//!   floored product, each with its own [`ApproachSettings`];
+//! * [`simulate_run`]: the vehicles of a [`RunSpec`] through sensors-audio (engine-like
+//!   sources, ground reflection, diffuse background noise) and through the sensors-video
+//!   renderer and background mixture (cameras at an angle to the road, swaying foliage,
+//!   glint, sensor noise), with the truth at every tick ([`Simulated`]);
+//! * [`score_with`] / [`score`]: one approach tracked on one simulated run, its mean error
+//!   per vehicle, MOTA and mean OSPA ([`Score`]).
+//!
+//! The sensors never read the truth to decide what to report; every random draw comes from
+//! the generator passed in.
+
+use std::collections::BTreeMap;
+use std::f64::consts::PI;
+
+use mcmcda::{McmcdaConfig, OnlineConfig};
+use sensors_audio::{BeamformConfig, MicArray};
+use sensors_video::{AngleProfiler, DetectionFilterConfig, MogConfig, PostConfig};
+use serde::Deserialize;
+use tracker_model::{Region2, Vec2};
+
+use crate::error::invalid;
+use crate::tuning::{MultiTuning, ScoreFit, Tuning};
+use crate::{
+    AvConfig, Error, FusionConfig, FusionRule, LobeEqualisation, Modalities, PeakExtraction,
+    PeakScores, RangeFade, Result, SchedulerConfig, SensorNode, SumScaling, TrackerConfig,
+};
+
+mod score;
+mod sim;
+#[cfg(test)]
+mod tests;
+
+pub use score::{Score, score, score_with};
+pub use sim::{RunSpec, Simulated, Vehicle, audio_poses, cameras, clock_offset_s, simulate_run};
+
+/// Table 1: the region, m (x along the road, y across it).
+pub const REGION_M: [f64; 2] = [35.0, 20.0];
+/// The road's centre line, m, and its two lanes' offsets from it (+x traffic on the lower lane).
+const ROAD_Y_M: f64 = 10.0;
+const LANE_OFFSET_M: f64 = 1.5;
+/// Metres per second in one mile per hour.
+pub const MPS_PER_MPH: f64 = 0.44704;
+
+/// One single-vehicle pass: the time it takes to cross the region and its direction.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PassSpec {
+    /// Seconds from entering to leaving the 35 m region (speed = 35 m / duration).
+    pub duration_s: f64,
+    /// +1: along +x on the lower lane; −1: along −x on the upper lane.
+    pub direction: i8,
+}
+
+/// A vehicle of a multi-vehicle run.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VehicleSpec {
+    /// Speed, mph.
+    pub speed_mph: f64,
+    /// +1 or −1 as in [`PassSpec`].
+    pub direction: i8,
+    /// Seconds after the run's lead-in at which it enters the region.
+    pub enter_s: f64,
+}
+
+/// The acoustic nodes.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AudioParams {
+    /// Background noise SNR, dB (diffuse field).
+    pub snr_db: f64,
+    /// Plane waves of the diffuse noise.
+    pub noise_directions: usize,
+    /// Ground reflection coefficient.
+    pub ground_reflection: f64,
+    /// The beamformer (36 beams).
+    pub beamform: BeamformConfig,
+    /// The beamformer of the runs with more than one vehicle, if not `beamform` (the same
+    /// beams and sample rate; e.g. MVDR in place of delay-and-sum).
+    #[serde(default)]
+    pub multi_beamform: Option<BeamformConfig>,
+}
+
+/// The cameras.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VideoParams {
+    /// Image width, pixels.
+    pub width: usize,
+    /// Image height, pixels.
+    pub height: usize,
+    /// Focal length, pixels.
+    pub focal_px: f64,
+    /// Frames per second.
+    pub fps: f64,
+    /// Frames rendered before the run for the background model to learn.
+    pub warmup_frames: usize,
+    /// Angles of the profile (Table 1: 160).
+    pub n_angles: usize,
+    /// Mast height, m.
+    pub mast_m: f64,
+    /// Downward tilt, degrees.
+    pub tilt_deg: f64,
+    /// Swaying clutter patches of the rendered scene.
+    pub n_sway_patches: usize,
+    /// Mean glints per rendered frame.
+    pub glints_per_frame: f64,
+    /// Sensor noise of the rendered frames (standard deviation).
+    pub noise_sigma: f64,
+    /// Background mixture segmentation.
+    pub mog: MogConfig,
+    /// Post-processing of the foreground masks.
+    pub post: PostConfig,
+    /// Temporal filter of the detection functions.
+    pub filter: DetectionFilterConfig,
+}
+
+/// One approach's settings, chosen for that approach alone by a search on tuning seeds
+/// ([`crate::tuning`]). Weights w_s are a multiplier in the weighted sum and an exponent in the
+/// product (w < 1 tempers, w > 1 sharpens a sensor's likelihood); a single-modality approach
+/// leaves the other modality's entries out (they would be unused; the default is 1).
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ApproachSettings {
+    /// Weight of the acoustic nodes.
+    #[serde(default = "one")]
+    pub audio_weight: f64,
+    /// Weight of the cameras.
+    #[serde(default = "one")]
+    pub video_weight: f64,
+    /// Profile exponent γ of the acoustic nodes (see [`SensorNode::exponent`]).
+    #[serde(default = "one")]
+    pub audio_exponent: f64,
+    /// Profile exponent γ of the cameras.
+    #[serde(default = "one")]
+    pub video_exponent: f64,
+    /// Floor ε of the product rule (required by the product approaches, unused by the sum).
+    #[serde(default)]
+    pub product_floor: Option<f64>,
+    /// The peaks' relative threshold κ (the other peak settings are [`Params::peaks`], shared).
+    pub relative_threshold: f64,
+    /// The peaks' non-maximum suppression radius, m.
+    pub suppression_radius_m: f64,
+    /// MCMCDA's detection probability (the rest is [`Params::mcmcda`], shared).
+    pub p_detect: f64,
+    /// MCMCDA's clutter rate per scan.
+    pub clutter_per_scan: f64,
+    /// Lobe equalisation of the acoustic nodes' profiles (`None`: as reported).
+    #[serde(default)]
+    pub audio_lobes: Option<LobeEqualisation>,
+    /// Lobe equalisation of the cameras' profiles (`None`: as reported).
+    #[serde(default)]
+    pub video_lobes: Option<LobeEqualisation>,
+    /// MCMCDA's birth rate per scan (`None`: [`Params::mcmcda`]'s).
+    #[serde(default)]
+    pub births_per_scan: Option<f64>,
+    /// Peaks by explaining away with this notch width σ, degrees (0: off; see
+    /// [`PeakExtraction::explain_away_deg`]).
+    #[serde(default)]
+    pub explain_away_deg: f64,
+    /// At most this many peaks per scan (`None`: [`Params::peaks`]'s).
+    #[serde(default)]
+    pub max_peaks: Option<usize>,
+    /// MCMCDA's speed limit v̄, m/s (`None`: [`Params::mcmcda`]'s). v̄ gates pairs of peaks,
+    /// so it has to cover the peaks' jitter as well as the vehicle's speed.
+    #[serde(default)]
+    pub max_speed: Option<f64>,
+    /// MCMCDA's largest gap d̄, scans (`None`: [`Params::mcmcda`]'s): it lets a track bridge
+    /// the ticks where another vehicle masks its peak.
+    #[serde(default)]
+    pub max_gap: Option<u32>,
+    /// The peaks' contrasts go to MCMCDA as detection scores, by the approach's table in
+    /// [`Params::multi_peak_scores`] (which must then exist; false: every peak counts the same).
+    #[serde(default)]
+    pub scored: bool,
+    /// Each sensor's evidence fades with range (`None`: off).
+    #[serde(default)]
+    pub range_fade: Option<RangeFade>,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// The settings of the six approaches, in [`APPROACHES`] order.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Settings {
+    /// Audio, weighted sum.
+    pub audio_sum: ApproachSettings,
+    /// Video, weighted sum.
+    pub video_sum: ApproachSettings,
+    /// Audio+video, weighted sum.
+    pub audio_video_sum: ApproachSettings,
+    /// Audio, floored product.
+    pub audio_product: ApproachSettings,
+    /// Video, floored product.
+    pub video_product: ApproachSettings,
+    /// Audio+video, floored product.
+    pub audio_video_product: ApproachSettings,
+}
+
+impl Settings {
+    /// Approach `a`'s settings (an index into [`APPROACHES`]; 5 and above: the last).
+    pub fn get(&self, a: usize) -> &ApproachSettings {
+        match a {
+            0 => &self.audio_sum,
+            1 => &self.video_sum,
+            2 => &self.audio_video_sum,
+            3 => &self.audio_product,
+            4 => &self.video_product,
+            _ => &self.audio_video_product,
+        }
+    }
+
+    /// Approach `a`'s settings, to change.
+    pub fn get_mut(&mut self, a: usize) -> &mut ApproachSettings {
+        match a {
+            0 => &mut self.audio_sum,
+            1 => &mut self.video_sum,
+            2 => &mut self.audio_video_sum,
+            3 => &mut self.audio_product,
+            4 => &mut self.video_product,
+            _ => &mut self.audio_video_product,
+        }
+    }
+}
+
+/// The scene, the approaches' settings and how they were chosen.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Params {
+    /// The single-vehicle passes (the paper's nine).
+    pub passes: Vec<PassSpec>,
+    /// Multi-vehicle runs.
+    pub multi: Vec<Vec<VehicleSpec>>,
+    /// Seconds before the first vehicle enters and after the last leaves.
+    pub pad_s: f64,
+    /// Grid cell, m (Table 1: 0.5).
+    pub cell_size_m: f64,
+    /// Scheduler.
+    pub scheduler: SchedulerConfig,
+    /// Acoustic nodes.
+    pub audio: AudioParams,
+    /// Cameras.
+    pub video: VideoParams,
+    /// Camera heading error of the main comparison, degrees (signs alternate by camera).
+    pub calibration_error_deg: f64,
+    /// Acoustic nodes' heading error of the main comparison, degrees (signs alternate by node).
+    pub audio_calibration_error_deg: f64,
+    /// Heading errors of the calibration sweep, degrees (applied to cameras and acoustic
+    /// nodes alike).
+    pub calibration_sweep_deg: Vec<f64>,
+    /// Each approach's own fusion weights, exponents, floor, peak threshold and NMS radius,
+    /// p_d and clutter rate (`[params.settings.<approach>]`), chosen by [`Tuning`]'s search.
+    pub settings: Settings,
+    /// Each approach's settings for the multi-vehicle runs (`[params.multi_settings]`),
+    /// chosen for it alone by [`MultiTuning`]'s search on the tuning seeds' multi-vehicle runs.
+    pub multi_settings: Settings,
+    /// Each approach's peak-score table for the multi-vehicle runs, keyed as the settings
+    /// are (`audio_sum`, ..., `audio_video_product`; an approach left out is unscored),
+    /// learnt on the tuning seeds by [`crate::tuning::fit_peak_scores`].
+    #[serde(default)]
+    pub multi_peak_scores: BTreeMap<String, PeakScores>,
+    /// How `multi_peak_scores` are learnt.
+    pub score_fit: ScoreFit,
+    /// Peak extraction (κ and the NMS radius come from the approach's settings).
+    pub peaks: PeakExtraction,
+    /// The tracker (p_d and the clutter rate come from the approach's settings; motion
+    /// period = 1 / scheduler rate).
+    pub mcmcda: McmcdaConfig,
+    /// The online tracker's window and sampling.
+    pub online: OnlineConfig,
+    /// A track is paired with a vehicle within this distance (error, MOTA).
+    pub match_distance_m: f64,
+    /// OSPA cut-off, m (order 1).
+    pub ospa_cutoff_m: f64,
+    /// How `settings` were chosen.
+    pub tuning: Tuning,
+    /// How `multi_settings` were chosen.
+    pub multi_tuning: MultiTuning,
+}
+
+/// The six approaches, modality × rule: (name, modalities, floored product rather than
+/// weighted sum).
+pub const APPROACHES: [(&str, Modalities, bool); 6] = [
+    ("audio, sum", Modalities::Audio, false),
+    ("video, sum", Modalities::Video, false),
+    ("audio+video, sum", Modalities::Both, false),
+    ("audio, product", Modalities::Audio, true),
+    ("video, product", Modalities::Video, true),
+    ("audio+video, product", Modalities::Both, true),
+];
+
+/// Heading errors of a run: acoustic nodes and cameras, degrees (signs alternate by node).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Calibration {
+    /// The acoustic nodes' heading error, degrees.
+    pub audio_deg: f64,
+    /// The cameras' heading error, degrees.
+    pub video_deg: f64,
+}
+
+/// The heading errors of the main comparison.
+pub fn nominal(p: &Params) -> Calibration {
+    Calibration {
+        audio_deg: p.audio_calibration_error_deg,
+        video_deg: p.calibration_error_deg,
+    }
+}
+
+/// The nodes as the fusion centre knows them: acoustic nodes and cameras with heading errors
+/// ±`calib` (a wrong believed heading: real nodes are oriented by compass or by hand, and an
+/// orientation error turns every bearing by the same angle), weighted by `weights`.
+pub fn sensor_nodes(
+    p: &Params,
+    calib: Calibration,
+    weights: &ApproachSettings,
+) -> Result<Vec<SensorNode>> {
+    let sign = |i: usize| if i.is_multiple_of(2) { 1.0 } else { -1.0 };
+    let mut nodes: Vec<SensorNode> = audio_poses()
+        .into_iter()
+        .enumerate()
+        .map(|(i, mut pose)| {
+            pose.heading_rad += sign(i) * calib.audio_deg * PI / 180.0;
+            let mut n = SensorNode::audio(format!("audio {i}"), pose, p.audio.beamform.n_beams);
+            n.clock_offset_s = clock_offset_s(i);
+            n.weight = weights.audio_weight;
+            n.exponent = weights.audio_exponent;
+            n.lobes = weights.audio_lobes;
+            n
+        })
+        .collect();
+    for (j, cam) in cameras(&p.video).into_iter().enumerate() {
+        let profiler = AngleProfiler::new(cam, p.video.n_angles)?;
+        let mut pose = cam.pose();
+        pose.heading_rad += sign(j) * calib.video_deg * PI / 180.0;
+        let mut n = SensorNode::video(format!("camera {j}"), pose, &profiler, p.video.n_angles);
+        n.clock_offset_s = clock_offset_s(6 + j);
+        n.weight = weights.video_weight;
+        n.exponent = weights.video_exponent;
+        n.lobes = weights.video_lobes;
+        nodes.push(n);
+    }
+    Ok(nodes)
+}
+
+/// Approach `a`'s settings for a run with one vehicle (`multi` false) or several.
+pub fn settings_of(p: &Params, a: usize, multi: bool) -> &ApproachSettings {
+    if multi {
+        p.multi_settings.get(a)
+    } else {
+        p.settings.get(a)
+    }
+}
+
+/// Approach `a`'s key in [`Params::settings`], [`Params::multi_settings`] and
+/// [`Params::multi_peak_scores`]: `audio_sum`, ..., `audio_video_product`.
+pub fn settings_key(a: usize) -> String {
+    APPROACHES[a]
+        .0
+        .replace([',', '+'], "")
+        .replace(' ', "_")
+        .to_lowercase()
+        .replace("__", "_")
+        .replace("audiovideo", "audio_video")
+}
+
+/// Approach `a`'s peak scores under settings `s` (none unless `s.scored`; only the
+/// multi-vehicle runs have tables).
+pub fn peak_scores_of<'p>(
+    p: &'p Params,
+    a: usize,
+    s: &ApproachSettings,
+) -> Result<Option<&'p PeakScores>> {
+    if !s.scored {
+        return Ok(None);
+    }
+    let approach = settings_key(a);
+    match p.multi_peak_scores.get(&approach) {
+        Some(table) => Ok(Some(table)),
+        None => Err(Error::MissingPeakScores { approach }),
+    }
+}
+
+/// Approach `a`'s configuration with settings `s` and peak scores `scores` over the shared
+/// ones.
+pub fn av_config(
+    p: &Params,
+    a: usize,
+    s: &ApproachSettings,
+    scores: Option<&PeakScores>,
+) -> Result<AvConfig> {
+    let (name, modalities, product) = APPROACHES[a];
+    let rule = if product {
+        let Some(floor) = s.product_floor else {
+            return Err(invalid(
+                "product_floor",
+                format!("approach {name}: the product rule needs product_floor"),
+            ));
+        };
+        FusionRule::Product { floor }
+    } else {
+        FusionRule::WeightedSum {
+            scaling: SumScaling::Max,
+        }
+    };
+    let mut mcmcda = p.mcmcda.clone();
+    mcmcda.p_detect = s.p_detect;
+    mcmcda.clutter_per_scan = s.clutter_per_scan;
+    if let Some(b) = s.births_per_scan {
+        mcmcda.births_per_scan = b;
+    }
+    if let Some(v) = s.max_speed {
+        mcmcda.max_speed = v;
+    }
+    if let Some(d) = s.max_gap {
+        mcmcda.max_gap = d;
+    }
+    Ok(AvConfig {
+        scheduler: p.scheduler,
+        fusion: FusionConfig {
+            region: region(),
+            cell_size_m: p.cell_size_m,
+            max_range_m: None,
+            min_range_m: 0.5,
+            range_fade: s.range_fade,
+            rule,
+            modalities,
+            peaks: PeakExtraction {
+                relative_threshold: s.relative_threshold,
+                suppression_radius_m: s.suppression_radius_m,
+                explain_away_deg: s.explain_away_deg,
+                max_peaks: s.max_peaks.unwrap_or(p.peaks.max_peaks),
+                ..p.peaks
+            },
+        },
+        tracker: TrackerConfig {
+            mcmcda,
+            online: p.online,
+            seed: 1,
+            peak_scores: scores.cloned(),
+        },
+    })
+}
+
+/// The region, [`REGION_M`] from the origin.
+pub fn region() -> Region2 {
+    Region2::new(Vec2::zeros(), Vec2::new(REGION_M[0], REGION_M[1]))
+        .unwrap_or_else(|_| unreachable!("a fixed valid region"))
+}
+
+/// The runs of the parameters: the single-vehicle passes, then the multi-vehicle runs.
+pub fn run_specs(p: &Params) -> Result<Vec<RunSpec>> {
+    let mut runs: Vec<RunSpec> = p
+        .passes
+        .iter()
+        .map(|s| RunSpec {
+            vehicles: vec![Vehicle::new(
+                REGION_M[0] / s.duration_s,
+                s.direction,
+                p.pad_s,
+            )],
+            duration_s: s.duration_s + 2.0 * p.pad_s,
+        })
+        .collect();
+    for vehicles in &p.multi {
+        if vehicles.is_empty() {
+            return Err(invalid("multi", "a multi-vehicle run has no vehicles"));
+        }
+        let end = vehicles
+            .iter()
+            .map(|v| v.enter_s + REGION_M[0] / (v.speed_mph * MPS_PER_MPH))
+            .fold(0.0, f64::max);
+        runs.push(RunSpec {
+            vehicles: vehicles
+                .iter()
+                .map(|v| Vehicle::new(v.speed_mph * MPS_PER_MPH, v.direction, p.pad_s + v.enter_s))
+                .collect(),
+            duration_s: end + 2.0 * p.pad_s,
+        });
+    }
+    Ok(runs)
+}
+
+/// Checks the parameters before any run: passes, the tuning seeds apart from the reported
+/// `seed`, the multi-vehicle beamformer, the peak-score tables and every approach's settings.
+pub fn check_params(p: &Params, seed: u64) -> Result<()> {
+    if p.passes.is_empty() {
+        return Err(invalid("passes", "no passes"));
+    }
+    if p.pad_s.is_nan() || p.pad_s < 0.0 {
+        return Err(invalid("pad_s", format!("{} must be >= 0", p.pad_s)));
+    }
+    if !p.passes.iter().all(|s| s.duration_s > 0.0) {
+        return Err(invalid("passes", "pass durations must be > 0"));
+    }
+    // Everything chosen or learnt on seeds is chosen on seeds other than the reported one.
+    for (table, seeds) in [
+        ("[params.tuning]", &p.tuning.seeds),
+        ("[params.multi_tuning]", &p.multi_tuning.seeds),
+        ("[params.score_fit]", &p.score_fit.seeds),
+    ] {
+        if seeds.contains(&seed) {
+            return Err(Error::ReportedSeed { table, seed });
+        }
+    }
+    check_multi_beamform(&p.audio)?;
+    let keys: Vec<String> = (0..APPROACHES.len()).map(settings_key).collect();
+    for (k, table) in &p.multi_peak_scores {
+        if !keys.contains(k) {
+            return Err(Error::UnknownApproach {
+                name: k.clone(),
+                known: keys.join(", "),
+            });
+        }
+        table.check().map_err(|e| Error::PeakScoreTable {
+            approach: k.clone(),
+            source: Box::new(e),
+        })?;
+    }
+    for a in 0..APPROACHES.len() {
+        // The tables are learnt on multi-vehicle runs, for those runs only.
+        if p.settings.get(a).scored {
+            return Err(invalid(
+                "scored",
+                format!(
+                    "[params.settings.{}]: scored is for the multi-vehicle settings only",
+                    settings_key(a)
+                ),
+            ));
+        }
+        for multi in [false, true] {
+            let s = settings_of(p, a, multi);
+            av_config(p, a, s, peak_scores_of(p, a, s)?)?.check()?;
+            for n in sensor_nodes(p, nominal(p), s)? {
+                n.check()?;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A multi-vehicle beamformer keeps the single-vehicle one's beams and sample rate.
+fn check_multi_beamform(audio: &AudioParams) -> Result<()> {
+    let Some(multi) = &audio.multi_beamform else {
+        return Ok(());
+    };
+    let single = &audio.beamform;
+    if (multi.n_beams, multi.sample_rate_hz) != (single.n_beams, single.sample_rate_hz) {
+        return Err(invalid(
+            "multi_beamform",
+            format!(
+                "[params.audio.multi_beamform] must keep [params.audio.beamform]'s n_beams ({}) \
+                 and sample_rate_hz ({})",
+                single.n_beams, single.sample_rate_hz
+            ),
+        ));
+    }
+    multi.check(&MicArray::default())?;
+    Ok(())
+}

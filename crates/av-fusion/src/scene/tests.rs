@@ -1,0 +1,91 @@
+//! Unit tests of the scene's parameter checks, on the parameters of the committed road
+//! configuration.
+
+use sensors_audio::BeamformConfig;
+
+use super::*;
+
+/// The committed configuration's parameters.
+fn committed() -> Params {
+    let text = include_str!("../../../../fixtures/scenarios/av-fusion-road.toml");
+    let table: toml::Table = toml::from_str(text).expect("the configuration parses");
+    table["params"]
+        .clone()
+        .try_into()
+        .expect("its parameters parse")
+}
+
+/// The checks' message on `p` with reported seed `seed`.
+fn rejected(p: &Params, seed: u64) -> String {
+    check_params(p, seed).expect_err("rejected").to_string()
+}
+
+#[test]
+fn the_committed_parameters_pass() {
+    let p = committed();
+    check_params(&p, 1801).expect("they pass");
+    assert_eq!(
+        run_specs(&p).expect("runs").len(),
+        p.passes.len() + p.multi.len()
+    );
+    assert_eq!(settings_key(2), "audio_video_sum");
+    assert_eq!(settings_key(3), "audio_product");
+}
+
+#[test]
+fn bad_score_settings_and_reused_seeds_are_rejected_before_any_run() {
+    let good = committed();
+    // A malformed table, even of an unscored approach.
+    let mut p = good.clone();
+    let table = p
+        .multi_peak_scores
+        .get_mut("audio_video_sum")
+        .expect("the table exists");
+    table.log_ratios.pop();
+    let err = rejected(&p, 1801);
+    assert!(err.contains("multi_peak_scores.audio_video_sum"), "{err}");
+    // An unknown approach.
+    let mut p = good.clone();
+    let any = p
+        .multi_peak_scores
+        .values()
+        .next()
+        .expect("a table")
+        .clone();
+    p.multi_peak_scores.insert("audio_and_video".into(), any);
+    let err = rejected(&p, 1801);
+    assert!(err.contains("unknown approach"), "{err}");
+    // Scores in the single-vehicle settings.
+    let mut p = good.clone();
+    p.settings.get_mut(5).scored = true;
+    let err = rejected(&p, 1801);
+    assert!(err.contains("multi-vehicle settings only"), "{err}");
+    // A multi-vehicle beamformer with other beams, or a bad one.
+    let mut p = good.clone();
+    p.audio.multi_beamform = Some(BeamformConfig {
+        n_beams: 18,
+        ..p.audio.beamform.clone()
+    });
+    let err = rejected(&p, 1801);
+    assert!(err.contains("multi_beamform"), "{err}");
+    p.audio.multi_beamform = Some(BeamformConfig {
+        method: sensors_audio::Method::Mvdr,
+        mvdr_forgetting: 1.5,
+        ..p.audio.beamform.clone()
+    });
+    let err = rejected(&p, 1801);
+    assert!(err.contains("mvdr_forgetting"), "{err}");
+    // The reported seed among the tuning seeds.
+    let err = rejected(&good, 2);
+    assert!(err.contains("reported seed 2"), "{err}");
+}
+
+#[test]
+fn vehicles_enter_the_region_on_their_lane_at_their_time() {
+    // +x traffic on the lower lane (y = 10 − 1.5), −x traffic on the upper one.
+    let v = Vehicle::new(10.0, 1, 0.6);
+    assert!((v.at(0.6) - Vec2::new(0.0, 8.5)).norm() < 1e-12);
+    let w = Vehicle::new(10.0, -1, 1.0);
+    assert!((w.at(1.0) - Vec2::new(35.0, 11.5)).norm() < 1e-12);
+    assert!((w.at(2.0) - Vec2::new(25.0, 11.5)).norm() < 1e-12);
+}

@@ -1,0 +1,56 @@
+//! Unit tests of the searches' pieces: expected values by hand.
+
+use super::multi::fade_with;
+use super::*;
+use crate::RangeFade;
+
+#[test]
+fn score_table_by_hand() {
+    // Contrasts 1..=6, the three largest near a vehicle; two bins split at the 3rd of
+    // 6 sorted values (index 3: contrast 4): bin 0 = {1, 2, 3} all far, bin 1 = {4, 5, 6}
+    // all near. With Laplace counts: near shares 1/5 and 4/5, far shares 4/5 and 1/5,
+    // so ln f₁/f₀ = ln(1/4) and ln 4.
+    let peaks: Vec<(f64, bool)> = (1..=6).map(|c| (f64::from(c), c > 3)).collect();
+    let (table, counts) = score_table(&peaks, 2).expect("fits");
+    assert_eq!(table.contrast_edges, vec![4.0]);
+    assert_eq!(counts, vec![[3, 0], [0, 3]]);
+    let want = [0.25f64.ln(), 4f64.ln()];
+    for (got, want) in table.log_ratios.iter().zip(want) {
+        assert!((got - want).abs() < 1e-12, "{got} against {want}");
+    }
+    // Ties merge edges: six equal contrasts leave one bin.
+    let flat: Vec<(f64, bool)> = (0..6).map(|i| (2.0, i % 2 == 0)).collect();
+    let (table, _) = score_table(&flat, 3).expect("fits");
+    assert!(table.contrast_edges.is_empty());
+    assert_eq!(table.log_ratios.len(), 1);
+    assert!(score_table(&[], 3).is_err());
+    assert!(score_table(&[(f64::NAN, true)], 3).is_err());
+}
+
+#[test]
+fn fade_coordinates_turn_on_change_and_turn_off() {
+    let on = fade_with(None, Some(8.0), None);
+    assert_eq!(
+        on,
+        Some(RangeFade {
+            full_weight_m: 8.0,
+            power: 1.0
+        })
+    );
+    let half = fade_with(on, None, Some(0.5));
+    assert_eq!(half.map(|f| (f.full_weight_m, f.power)), Some((8.0, 0.5)));
+    assert_eq!(fade_with(half, Some(0.0), None), None);
+    assert_eq!(fade_with(None, None, Some(2.0)), None);
+}
+
+#[test]
+fn approaches_are_all_or_valid_indices() {
+    assert_eq!(
+        approaches_in("all").expect("all"),
+        (0..6).collect::<Vec<_>>()
+    );
+    assert_eq!(approaches_in("5, 2").expect("list"), vec![5, 2]);
+    assert!(approaches_in("6").is_err());
+    assert!(approaches_in("1,x").is_err());
+    assert!(approaches_in("").is_err());
+}
