@@ -114,9 +114,10 @@ enum Command {
         /// --tracker gnn: output frame by frame (gnn-online).
         #[arg(long)]
         online: bool,
-        /// With --tracker phd: a folder of the video's frames (PNG/PGM/PPM, frame number in
-        /// the file name, e.g. img1/000001.png); SMC-PHD is fused with an image local detector
-        /// per target (image-detector), as in the phd-images scenarios.
+        /// A folder of the video's frames (PNG/PGM/PPM, frame number in the file name, e.g.
+        /// img1/000001.png). With --tracker phd, SMC-PHD is fused with an image local detector
+        /// per target (image-detector), as in the phd-images scenarios; with any tracker,
+        /// --overlay draws on them.
         #[arg(long)]
         frames: Option<PathBuf>,
         /// A folder of the video's frames to detect in: the review's camera pipeline
@@ -136,6 +137,14 @@ enum Command {
         /// With --video: also write the detections made as MOTChallenge text to this file.
         #[arg(long, requires = "video")]
         detections_out: Option<PathBuf>,
+        /// With --video: TOML of the detector (warmup_frames, [mog] the background mixture,
+        /// [post] opening, closing and the smallest blob; mot::video::VideoDetectorConfig).
+        #[arg(long, requires = "video")]
+        video_config: Option<PathBuf>,
+        /// With --tracker phd and --video or --frames: track the detections alone, without the
+        /// image local detectors (the frames are then only drawn on by --overlay).
+        #[arg(long)]
+        no_fusion: bool,
     },
     /// Write a realistic pedestrian sequence (mot::walkers): OUT-det.txt (detections
     /// with scores) and OUT-gt.txt (ground truth), MOTChallenge text.
@@ -219,6 +228,8 @@ fn main() -> ExitCode {
             first_frame,
             overlay,
             detections_out,
+            video_config,
+            no_fusion,
         } => track::run(&track::Request {
             tracker: match (tracker, online) {
                 (Some(mot::track::TrackerKind::Mcmcda), true) => {
@@ -239,6 +250,8 @@ fn main() -> ExitCode {
             first_frame,
             overlay: overlay.as_deref(),
             detections_out: detections_out.as_deref(),
+            video_config: video_config.as_deref(),
+            no_fusion,
         }),
         Command::FetchData { name } => data::run(&name),
         Command::Walkers {

@@ -63,6 +63,10 @@ pub struct Request<'a> {
     pub overlay: Option<&'a Path>,
     /// Where to write the detections made from `video`.
     pub detections_out: Option<&'a Path>,
+    /// TOML of the video detector ([`VideoDetectorConfig`]), defaults where unset.
+    pub video_config: Option<&'a Path>,
+    /// Run the PHD tracker on the detections alone even with frames (they are drawn on only).
+    pub no_fusion: bool,
 }
 
 impl Request<'_> {
@@ -71,10 +75,14 @@ impl Request<'_> {
         self.video.or(self.frames)
     }
 
-    /// The fused tracker's settings when a folder is given to the PHD tracker.
+    /// The fused tracker's settings when a folder is given to the PHD tracker (named, or
+    /// implied by `--frames` alone with `--print-config`), unless `no_fusion`.
     fn fused(&self) -> Option<FusedSettings> {
-        let fused =
-            self.frames.is_some() || self.video.is_some() && self.tracker == Some(TrackerKind::Phd);
+        let phd = match self.tracker {
+            Some(tracker) => tracker == TrackerKind::Phd,
+            None => self.frames.is_some(),
+        };
+        let fused = phd && self.folder().is_some() && !self.no_fusion;
         fused.then(|| FusedSettings {
             first_frame: self.first_frame,
             ..FusedSettings::default()
@@ -109,6 +117,13 @@ pub fn run(req: &Request<'_>) -> Outcome {
     let (Some(tracker), Some(out)) = (req.tracker, req.out) else {
         bail!("track needs --tracker, --input (or --video) and --out (or --print-config)");
     };
+    if req.frames.is_some() && req.fused().is_none() && req.overlay.is_none() {
+        bail!(
+            "--frames with --tracker {tracker}{}: the frames would only be drawn on, so give \
+             --overlay (the image-fused tracker is --tracker phd)",
+            if req.no_fusion { " --no-fusion" } else { "" }
+        );
+    }
     let rows = detections(req)?;
     let start = std::time::Instant::now();
     let fused = req.fused();
@@ -153,7 +168,11 @@ fn detections(req: &Request<'_>) -> Result<Vec<MotRow>> {
         (Some(input), None) => read_input(input),
         (None, Some(dir)) => {
             let folder = req.open_folder()?.context("--video needs a folder")?;
-            let config = VideoDetectorConfig::default();
+            let config: VideoDetectorConfig = match req.video_config {
+                Some(path) => toml::from_str(&read_file(path)?)
+                    .with_context(|| format!("in {}", path.display()))?,
+                None => VideoDetectorConfig::default(),
+            };
             eprintln!(
                 "detecting in {} frames of {} (background mixture, {} warm-up frames)",
                 folder.len(),
@@ -316,6 +335,8 @@ mod tests {
             first_frame: None,
             overlay: None,
             detections_out: None,
+            video_config: None,
+            no_fusion: false,
         };
         let settings = TrackConfig::default();
         let plain = config_text(&request(None), &settings).unwrap();

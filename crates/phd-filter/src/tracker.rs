@@ -98,6 +98,12 @@ impl<F: PhdFilter, D: LocalDetectorFactory> PhdTracker<F, D> {
         })
     }
 
+    /// The filter, for what it knows beyond the estimates (its particles' labels and
+    /// weights, say).
+    pub fn filter(&self) -> &F {
+        &self.filter
+    }
+
     /// The local detectors.
     pub fn bank(&self) -> &DetectorBank {
         &self.bank

@@ -43,6 +43,7 @@ mod phd;
 use association::track_points;
 use boxes::{detection_boxes, kernel_reach};
 use fit::{Detections, GAP_BOX_WIDTHS, centres, detections_by_frame, problem_of, score_ratios};
+pub(crate) use phd::Labeller;
 use phd::{MAX_COAST_FRAMES, track_boxes_phd};
 
 pub use boxes::smooth_boxes;
@@ -936,6 +937,10 @@ const KEY_COMMENTS: [(&str, &[(&str, &str)]); 9] = [
             (
                 "max_misses",
                 "the most frames a confirmed track is output from the prediction",
+            ),
+            (
+                "duplicate_cover",
+                "a tentative track is dropped when a confirmed track's box covers this share of its box (unset: never)",
             ),
         ],
     ),

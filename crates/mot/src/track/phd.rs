@@ -34,6 +34,11 @@ pub struct PhdLabelConfig {
     /// The most frames a confirmed track is output from the prediction (at most 10 000: a gap
     /// in the frame numbers costs at most this many boxes per track).
     pub max_misses: u32,
+    /// A tentative track is dropped instead of confirmed when a confirmed track's predicted
+    /// box covers at least this share of its own box: a second label on a target already
+    /// followed (unset: never dropped for that; the fused tracker of [`crate::frames`] sets
+    /// it).
+    pub duplicate_cover: Option<f64>,
 }
 
 impl Default for PhdLabelConfig {
@@ -50,6 +55,7 @@ impl Default for PhdLabelConfig {
             min_iou: 0.2,
             min_mass: 0.02,
             max_misses: 40,
+            duplicate_cover: None,
         }
     }
 }
@@ -91,7 +97,7 @@ pub(super) fn track_boxes_phd(
     // transition and weights p_Sᵏ (1 − p_D)ᵏ⁻¹ (`SmcPhd::step_after`), and the labeller
     // coasts through it in closed form (`coast_through_gap`). The cost is bounded by the
     // detection frames, not by the span of frame numbers.
-    let mut labeller = Labeller::new(settings);
+    let mut labeller = Labeller::new(settings.phd, settings.phd_labels);
     let mut previous: Option<Frame> = None;
     // The frames run on a thread of rayon's pool, so that the filter's parallel passes fork
     // from inside the pool. Called from outside it, each pass was handed to the pool and
@@ -104,24 +110,13 @@ pub(super) fn track_boxes_phd(
             let frames = match previous {
                 Some(prev) => {
                     let frames = u64::from(frame) - u64::from(prev);
-                    if frames > 1 {
-                        coast_through_gap(
-                            prev,
-                            frames - 1,
-                            &phd,
-                            &mut labeller.live,
-                            &mut labeller.done,
-                            settings,
-                        )?;
-                    }
+                    labeller.coast_gap(prev, frames - 1, &phd);
                     frames
                 }
                 None => 1,
             };
             let step = phd.step_after(frames, boxes)?;
-            let mass = LabelMasses::of(&phd);
-            let updated = labeller.take_estimates(frame, &step.estimates);
-            labeller.manage(frame, updated, &mass);
+            labeller.take_frame(frame, &step.estimates, &phd);
             previous = Some(frame);
         }
         Ok(())
@@ -130,8 +125,11 @@ pub(super) fn track_boxes_phd(
 }
 
 /// The track manager's state: live tracks (tentative or confirmed), ended ones, and the next
-/// id to give.
-struct Labeller {
+/// id to give. `--tracker phd` and the fused tracker of [`crate::frames`] share it: the
+/// filter's labels are not tracks (a label can die and another take its target over, and a
+/// newborn label need not be a target), so both confirm M of N, carry an id across label
+/// changes by overlap, and coast a missed track while its label keeps its mass.
+pub(crate) struct Labeller {
     config: PhdConfig,
     labels: PhdLabelConfig,
     live: Vec<PhdTrack>,
@@ -140,14 +138,39 @@ struct Labeller {
 }
 
 impl Labeller {
-    fn new(settings: &EffectiveConfig) -> Self {
+    pub(crate) fn new(config: PhdConfig, labels: PhdLabelConfig) -> Self {
         Self {
-            config: settings.phd,
-            labels: settings.phd_labels,
+            config,
+            labels,
             live: Vec::new(),
             done: Vec::new(),
             next_id: 1,
         }
+    }
+
+    /// The `gap` frames after `prev` that had no step: [`coast_through_gap`], with the label
+    /// masses of `phd` at `prev` (call before the filter steps past the gap).
+    pub(crate) fn coast_gap(&mut self, prev: Frame, gap: u64, phd: &SmcPhd) {
+        if gap > 0 {
+            let (config, labels) = (self.config, self.labels);
+            coast_through_gap(
+                prev,
+                gap,
+                phd,
+                &mut self.live,
+                &mut self.done,
+                config,
+                labels,
+            );
+        }
+    }
+
+    /// A stepped frame: its estimates taken, tracks confirmed, coasted or ended with the
+    /// label masses of `phd` after the step.
+    pub(crate) fn take_frame(&mut self, frame: Frame, estimates: &[Estimate], phd: &SmcPhd) {
+        let mass = LabelMasses::of(phd);
+        let updated = self.take_estimates(frame, estimates);
+        self.manage(frame, updated, &mass);
     }
 
     /// Gives each of a frame's estimates to the live track that holds its label, else to the
@@ -208,9 +231,23 @@ impl Labeller {
     /// its label holds its share of the PHD mass and it has not missed too many frames.
     fn manage(&mut self, frame: Frame, updated: Vec<bool>, mass: &LabelMasses) {
         let (config, labels) = (self.config, self.labels);
+        let followed: Vec<BoundingBox> = match labels.duplicate_cover {
+            Some(_) => self
+                .live
+                .iter()
+                .filter(|t| t.id.is_some())
+                .map(|t| predicted(t, frame))
+                .collect(),
+            None => Vec::new(),
+        };
         let mut kept = Vec::with_capacity(self.live.len());
         for (mut t, up) in self.live.drain(..).zip(updated) {
             if t.id.is_none() {
+                if t.hits >= labels.confirm_hits
+                    && covered(&t.last_box, &followed, labels.duplicate_cover)
+                {
+                    continue;
+                }
                 if t.hits >= labels.confirm_hits {
                     t.id = Some(self.next_id);
                     self.next_id += 1;
@@ -252,7 +289,7 @@ impl Labeller {
     }
 
     /// The confirmed tracks, each without the coasted frames after its last estimate.
-    fn finish(self) -> Result<TrackSet> {
+    pub(crate) fn finish(self) -> Result<TrackSet> {
         let mut done = self.done;
         done.extend(self.live.into_iter().filter(|t| t.id.is_some()));
         let mut tracks = Vec::with_capacity(done.len());
@@ -265,6 +302,17 @@ impl Labeller {
         }
         Ok(TrackSet::from_tracks(tracks)?)
     }
+}
+
+/// Whether one of the `followed` boxes covers at least `cover` of `bbox`'s area.
+fn covered(bbox: &BoundingBox, followed: &[BoundingBox], cover: Option<f64>) -> bool {
+    let area = bbox.area();
+    cover.is_some_and(|c| {
+        area > 0.0
+            && followed
+                .iter()
+                .any(|f| f.intersection_area(bbox) >= c * area)
+    })
 }
 
 /// A PHD track takes an estimate: coasted points stay (they were output), velocity from the
@@ -351,9 +399,9 @@ fn coast_through_gap(
     phd: &SmcPhd,
     live: &mut Vec<PhdTrack>,
     done: &mut Vec<PhdTrack>,
-    settings: &EffectiveConfig,
-) -> Result<()> {
-    let (config, labels) = (settings.phd, settings.phd_labels);
+    config: PhdConfig,
+    labels: PhdLabelConfig,
+) {
     let per_frame = config.p_survive * (1.0 - config.p_detect);
     let mass = LabelMasses::of(phd);
     let mut kept = Vec::with_capacity(live.len());
@@ -382,7 +430,6 @@ fn coast_through_gap(
         kept.push(t);
     }
     *live = kept;
-    Ok(())
 }
 
 /// The most frames a PHD track may coast (`[phd_labels] max_misses`): a gap in the frame
@@ -415,6 +462,14 @@ impl PhdLabelConfig {
                 format!("{} must be finite and ≥ 0", self.min_mass),
             ));
         }
+        if let Some(cover) = self.duplicate_cover
+            && !(cover.is_finite() && cover > 0.0 && cover <= 1.0)
+        {
+            return Err(crate::error::invalid(
+                "duplicate_cover",
+                format!("{cover} must be in (0, 1]"),
+            ));
+        }
         if self.max_misses > MAX_COAST_FRAMES {
             return Err(crate::error::invalid(
                 "max_misses",
@@ -441,6 +496,45 @@ mod tests {
             confidence: 0.9,
             world: [-1.0; 3],
         }
+    }
+
+    #[test]
+    fn a_second_label_inside_a_followed_target_is_not_confirmed() {
+        let estimate = |label, left: f64| Estimate {
+            label,
+            state: [0.0; 6],
+            bbox: BoundingBox::new(left, 100.0, 40.0, 100.0).unwrap(),
+            weight: 1.0,
+            measurement: None,
+        };
+        let inside = |label| Estimate {
+            bbox: BoundingBox::new(105.0, 110.0, 20.0, 60.0).unwrap(),
+            ..estimate(label, 0.0)
+        };
+        let no_mass = LabelMasses(Vec::new());
+        let run = |cover| {
+            let labels = PhdLabelConfig {
+                duplicate_cover: cover,
+                ..PhdLabelConfig::default()
+            };
+            let mut labeller = Labeller::new(PhdConfig::default(), labels);
+            // Label 1 is confirmed at its second estimate (frame 2); label 2, wholly inside
+            // its box, from frame 2; label 3 far away from frame 2.
+            for frame in 1..=5 {
+                let mut estimates = vec![estimate(1, 100.0)];
+                if frame >= 2 {
+                    estimates.extend([inside(2), estimate(3, 400.0)]);
+                }
+                let updated = labeller.take_estimates(frame, &estimates);
+                labeller.manage(frame, updated, &no_mass);
+            }
+            labeller.finish().unwrap().len()
+        };
+        // Label 2's box is 100 % covered by label 1's: dropped with any cover ≤ 1; the far
+        // label 3 is confirmed either way.
+        assert_eq!(run(Some(1.0)), 2);
+        assert_eq!(run(Some(0.2)), 2);
+        assert_eq!(run(None), 3);
     }
 
     #[test]
