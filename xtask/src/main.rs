@@ -81,71 +81,7 @@ enum Command {
     },
     /// Track MOTChallenge detections and write MOTChallenge tracks. Each tracker's model is
     /// fitted to the detections (p_d, clutter, births, noise; printed); --config overrides any key.
-    Track {
-        /// mcmcda: offline (batch) MCMCDA on the box centres; mcmcda-online: the sliding-window
-        /// tracker, output frame by frame; gnn: global nearest neighbour with M-of-N
-        /// confirmation on the box centres (all three output boxes fitted to each track's
-        /// detections); gnn-online: GNN output frame by frame, coasting through misses; phd:
-        /// SMC-PHD on the boxes themselves.
-        #[arg(long, required_unless_present = "print_config")]
-        tracker: Option<mot::track::TrackerKind>,
-        /// Detections (frame,id,left,top,width,height,conf,...).
-        #[arg(long, required_unless_present_any = ["print_config", "video"])]
-        input: Option<PathBuf>,
-        /// Where to write the tracks.
-        #[arg(long, required_unless_present = "print_config")]
-        out: Option<PathBuf>,
-        /// TOML with optional `[model]` (MCMCDA's and GNN's model, overriding a model scaled
-        /// to the median box width), `[online]`, `[gnn]` and `[phd]` (overriding a PHD model
-        /// scaled to the boxes) tables; every table present is checked. See --print-config
-        /// and fixtures/configs/.
-        #[arg(long)]
-        config: Option<PathBuf>,
-        /// Seed of the tracker's random generator (MCMCDA's chains, the PHD filter's
-        /// particles; GNN draws nothing).
-        #[arg(long, default_value_t = 0)]
-        seed: u64,
-        /// Print the effective configuration (every key, its value and a comment) as TOML
-        /// that --config loads, and exit: the tables of --tracker (all without it), scaled to
-        /// --input's boxes when given, with --config applied.
-        #[arg(long)]
-        print_config: bool,
-        /// With --tracker mcmcda: run the online sliding-window tracker (mcmcda-online); with
-        /// --tracker gnn: output frame by frame (gnn-online).
-        #[arg(long)]
-        online: bool,
-        /// A folder of the video's frames (PNG/PGM/PPM, frame number in the file name, e.g.
-        /// img1/000001.png). With --tracker phd, SMC-PHD is fused with an image local detector
-        /// per target (image-detector), as in the phd-images scenarios; with any tracker,
-        /// --overlay draws on them.
-        #[arg(long)]
-        frames: Option<PathBuf>,
-        /// A folder of the video's frames to detect in: the review's camera pipeline
-        /// (background mixture with shadow removal, cleaned mask, blobs) makes the detections
-        /// instead of --input, and any tracker follows them; with --tracker phd the image
-        /// local detectors are fused on the same frames.
-        #[arg(long, conflicts_with = "input")]
-        video: Option<PathBuf>,
-        /// The frame number of the first image of --video or --frames (default: the numbers in
-        /// the file names). MOTChallenge frames start at 1.
-        #[arg(long)]
-        first_frame: Option<u32>,
-        /// Write the frames of --video or --frames with the tracks drawn (boxes and ids) as PNG
-        /// files to this folder.
-        #[arg(long)]
-        overlay: Option<PathBuf>,
-        /// With --video: also write the detections made as MOTChallenge text to this file.
-        #[arg(long, requires = "video")]
-        detections_out: Option<PathBuf>,
-        /// With --video: TOML of the detector (warmup_frames, [mog] the background mixture,
-        /// [post] opening, closing and the smallest blob; mot::video::VideoDetectorConfig).
-        #[arg(long, requires = "video")]
-        video_config: Option<PathBuf>,
-        /// With --tracker phd and --video or --frames: track the detections alone, without the
-        /// image local detectors (the frames are then only drawn on by --overlay).
-        #[arg(long)]
-        no_fusion: bool,
-    },
+    Track(track::TrackArgs),
     /// Write a realistic pedestrian sequence (mot::walkers): OUT-det.txt (detections
     /// with scores) and OUT-gt.txt (ground truth), MOTChallenge text.
     Walkers {
@@ -215,44 +151,7 @@ fn main() -> ExitCode {
         ),
         Command::Ci { determinism_only } => ci::run(determinism_only),
         Command::Fuzz { seconds, filter } => fuzz::run(seconds, filter.as_deref()),
-        Command::Track {
-            tracker,
-            input,
-            out,
-            config,
-            seed,
-            print_config,
-            online,
-            frames,
-            video,
-            first_frame,
-            overlay,
-            detections_out,
-            video_config,
-            no_fusion,
-        } => track::run(&track::Request {
-            tracker: match (tracker, online) {
-                (Some(mot::track::TrackerKind::Mcmcda), true) => {
-                    Some(mot::track::TrackerKind::McmcdaOnline)
-                }
-                (Some(mot::track::TrackerKind::Gnn), true) => {
-                    Some(mot::track::TrackerKind::GnnOnline)
-                }
-                (t, _) => t,
-            },
-            input: input.as_deref(),
-            out: out.as_deref(),
-            config: config.as_deref(),
-            seed,
-            print_config,
-            frames: frames.as_deref(),
-            video: video.as_deref(),
-            first_frame,
-            overlay: overlay.as_deref(),
-            detections_out: detections_out.as_deref(),
-            video_config: video_config.as_deref(),
-            no_fusion,
-        }),
+        Command::Track(args) => track::run(&args.request()),
         Command::FetchData { name } => data::run(&name),
         Command::Walkers {
             seed,

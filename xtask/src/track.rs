@@ -3,7 +3,7 @@
 //! MOTChallenge tracks. `--print-config` prints the effective configuration instead.
 
 use std::fs;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 use mot::frames::FusedSettings;
@@ -36,6 +36,100 @@ fn read_input(input: &Path) -> Result<Vec<MotRow>> {
         eprintln!("note: {note}");
     }
     Ok(rows)
+}
+
+/// `cargo xtask track`'s command line.
+#[derive(clap::Args)]
+pub struct TrackArgs {
+    /// mcmcda: offline (batch) MCMCDA on the box centres; mcmcda-online: the sliding-window
+    /// tracker, output frame by frame; gnn: global nearest neighbour with M-of-N
+    /// confirmation on the box centres (all three output boxes fitted to each track's
+    /// detections); gnn-online: GNN output frame by frame, coasting through misses; phd:
+    /// SMC-PHD on the boxes themselves.
+    #[arg(long, required_unless_present = "print_config")]
+    pub tracker: Option<mot::track::TrackerKind>,
+    /// Detections (frame,id,left,top,width,height,conf,...).
+    #[arg(long, required_unless_present_any = ["print_config", "video"])]
+    pub input: Option<PathBuf>,
+    /// Where to write the tracks.
+    #[arg(long, required_unless_present = "print_config")]
+    pub out: Option<PathBuf>,
+    /// TOML with optional `[model]` (MCMCDA's and GNN's model, overriding a model scaled
+    /// to the median box width), `[online]`, `[gnn]` and `[phd]` (overriding a PHD model
+    /// scaled to the boxes) tables; every table present is checked. See --print-config
+    /// and fixtures/configs/.
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Seed of the tracker's random generator (MCMCDA's chains, the PHD filter's
+    /// particles; GNN draws nothing).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Print the effective configuration (every key, its value and a comment) as TOML
+    /// that --config loads, and exit: the tables of --tracker (all without it), scaled to
+    /// --input's boxes when given, with --config applied.
+    #[arg(long)]
+    pub print_config: bool,
+    /// With --tracker mcmcda: run the online sliding-window tracker (mcmcda-online); with
+    /// --tracker gnn: output frame by frame (gnn-online).
+    #[arg(long)]
+    pub online: bool,
+    /// A folder of the video's frames (PNG/PGM/PPM, frame number in the file name, e.g.
+    /// img1/000001.png). With --tracker phd, SMC-PHD is fused with an image local detector
+    /// per target (image-detector), as in the phd-images scenarios; with any tracker,
+    /// --overlay draws on them.
+    #[arg(long)]
+    pub frames: Option<PathBuf>,
+    /// A folder of the video's frames to detect in: the review's camera pipeline
+    /// (background mixture with shadow removal, cleaned mask, blobs) makes the detections
+    /// instead of --input, and any tracker follows them; with --tracker phd the image
+    /// local detectors are fused on the same frames.
+    #[arg(long, conflicts_with = "input")]
+    pub video: Option<PathBuf>,
+    /// The frame number of the first image of --video or --frames (default: the numbers in
+    /// the file names). MOTChallenge frames start at 1.
+    #[arg(long)]
+    pub first_frame: Option<u32>,
+    /// Write the frames of --video or --frames with the tracks drawn (boxes and ids) as PNG
+    /// files to this folder.
+    #[arg(long)]
+    pub overlay: Option<PathBuf>,
+    /// With --video: also write the detections made as MOTChallenge text to this file.
+    #[arg(long, requires = "video")]
+    pub detections_out: Option<PathBuf>,
+    /// With --video: TOML of the detector (warmup_frames, [mog] the background mixture,
+    /// [post] opening, closing and the smallest blob; mot::video::VideoDetectorConfig).
+    #[arg(long, requires = "video")]
+    pub video_config: Option<PathBuf>,
+    /// With --tracker phd and --video or --frames: track the detections alone, without the
+    /// image local detectors (the frames are then only drawn on by --overlay).
+    #[arg(long)]
+    pub no_fusion: bool,
+}
+
+impl TrackArgs {
+    /// The request these arguments make (`--online` turns mcmcda and gnn into their online
+    /// variants).
+    pub fn request(&self) -> Request<'_> {
+        Request {
+            tracker: match (self.tracker, self.online) {
+                (Some(TrackerKind::Mcmcda), true) => Some(TrackerKind::McmcdaOnline),
+                (Some(TrackerKind::Gnn), true) => Some(TrackerKind::GnnOnline),
+                (t, _) => t,
+            },
+            input: self.input.as_deref(),
+            out: self.out.as_deref(),
+            config: self.config.as_deref(),
+            seed: self.seed,
+            print_config: self.print_config,
+            frames: self.frames.as_deref(),
+            video: self.video.as_deref(),
+            first_frame: self.first_frame,
+            overlay: self.overlay.as_deref(),
+            detections_out: self.detections_out.as_deref(),
+            video_config: self.video_config.as_deref(),
+            no_fusion: self.no_fusion,
+        }
+    }
 }
 
 /// What `cargo xtask track` was asked.
