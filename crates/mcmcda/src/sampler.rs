@@ -510,7 +510,6 @@ impl<'a, R: Rng> Chain<'a, R> {
         if end == End::Head {
             from.reverse();
         }
-        let len = from.len();
         self.grown.clear();
         // ln of the probability of the way taken, the stop apart: the end, the move, the
         // kept part, and the growth steps.
@@ -519,10 +518,39 @@ impl<'a, R: Rng> Chain<'a, R> {
             End::Tail => (-head).ln_1p(),
         };
         let log_way = log_end + self.state.model.log_move_probability(m, k);
+        let proposed = self.grow_single_track(m, end, &from, log_way);
+        let unchanged = self.grown == from;
+        self.from = from;
+        let Some(log_q_forward_at_least) = proposed else {
+            self.state.reinsert(old);
+            return Outcome::Rejected;
+        };
+        if unchanged {
+            self.state.reinsert(old);
+            return Outcome::Accepted;
+        }
+        let mut new = std::mem::take(&mut self.grown);
+        if end == End::Head {
+            new.reverse();
+        }
+        self.decide_single_track(k, old, new, log_q_forward_at_least)
+    }
+
+    /// The new track of [`Self::single_track`] in growth order, into `self.grown`, from the
+    /// old one in growth order (`from`); returns ln of the probability of the way taken (a
+    /// lower bound on q(ω → ω')), or `None` when move `m` cannot be made on this track.
+    fn grow_single_track(
+        &mut self,
+        m: Move,
+        end: End,
+        from: &[MeasId],
+        log_way: f64,
+    ) -> Option<f64> {
+        let len = from.len();
         let gamma = self.state.model.config.stop_probability;
-        let proposed = match m {
+        match m {
             Move::Extension => {
-                self.grown.extend_from_slice(&from);
+                self.grown.extend_from_slice(from);
                 self.state
                     .grow(
                         from[len - 1],
@@ -554,21 +582,19 @@ impl<'a, R: Rng> Chain<'a, R> {
                     .map(|steps| log_way - ln_count(len) + steps + gamma.ln())
             }
             _ => None,
-        };
-        let unchanged = self.grown == from;
-        self.from = from;
-        let Some(log_q_forward_at_least) = proposed else {
-            self.state.reinsert(old);
-            return Outcome::Rejected;
-        };
-        if unchanged {
-            self.state.reinsert(old);
-            return Outcome::Accepted;
         }
-        let mut new = std::mem::take(&mut self.grown);
-        if end == End::Head {
-            new.reverse();
-        }
+    }
+
+    /// Filters the proposed track `new` (K = `k` with it) that would replace `old`, and
+    /// accepts or rejects it: the Metropolis-Hastings ratio is first bounded with
+    /// `log_q_forward_at_least`, and both q are computed only when the bound cannot decide.
+    fn decide_single_track(
+        &mut self,
+        k: usize,
+        mut old: TrackState,
+        new: Vec<MeasId>,
+        log_q_forward_at_least: f64,
+    ) -> Outcome {
         let keep = old
             .meas
             .iter()
@@ -580,7 +606,6 @@ impl<'a, R: Rng> Chain<'a, R> {
         // (no copy of the kept prefix, which is most of a long track), and the nodes it
         // overwrites are saved, so that a rejection puts the old track back exactly. Else
         // (a head move changes most of it) the short kept prefix is copied.
-        let mut old = old;
         let handed_over = keep >= old.nodes.len() - keep;
         let candidate = if handed_over {
             self.saved_nodes.clear();

@@ -406,11 +406,10 @@ fn ranks_above<const C: usize>(a: &Comp<C>, b: &Comp<C>) -> bool {
     a.w * a.w * var_sum(b) > b.w * b.w * var_sum(a)
 }
 
+/// One pixel of one frame (KaewTraKulPong & Bowden 2001, §2): the matched or new component
+/// updated, the order by ω/σ restored, and the pixel labelled by where its component falls
+/// among the first B (background), or as a shadow of one of them.
 #[inline]
-#[expect(
-    clippy::needless_range_loop,
-    reason = "channel loops index x, μ and σ² together, as the equations do"
-)]
 fn update_pixel<const C: usize>(
     x: &[u8],
     comps: &mut [Comp<C>],
@@ -423,55 +422,9 @@ fn update_pixel<const C: usize>(
     for (v, &b) in xs.iter_mut().zip(x) {
         *v = f32::from(b);
     }
-    let nu = usize::from(*used);
-    let mut hit = None;
-    for (k, c) in comps[..nu].iter().enumerate() {
-        let mut d2 = 0.0;
-        for ch in 0..C {
-            let d = xs[ch] - c.mean[ch];
-            d2 += d * d;
-        }
-        if d2 < p.lambda2 * var_sum(c) {
-            hit = Some(k);
-            break;
-        }
-    }
-    let k = match hit {
-        Some(k) => {
-            for (i, c) in comps[..nu].iter_mut().enumerate() {
-                let target = if i == k { 1.0 } else { 0.0 };
-                c.w += (target - c.w) * rate_w;
-            }
-            let c = &mut comps[k];
-            c.n += 1.0;
-            let rho = if phase1 { 1.0 / c.n } else { 1.0 / (p.l * c.w) };
-            for ch in 0..C {
-                let d = xs[ch] - c.mean[ch];
-                c.mean[ch] += rho * d;
-                c.var[ch] = (c.var[ch] + rho * (d * d - c.var[ch])).max(p.var_min);
-            }
-            k
-        }
-        None => {
-            let k = if nu < p.k {
-                *used += 1;
-                nu
-            } else {
-                nu - 1
-            };
-            comps[k] = Comp {
-                w: p.w0,
-                n: 1.0,
-                mean: xs,
-                var: [p.var0; C],
-            };
-            let nu = usize::from(*used);
-            let sum: f32 = comps[..nu].iter().map(|c| c.w).sum();
-            for c in &mut comps[..nu] {
-                c.w /= sum;
-            }
-            k
-        }
+    let k = match first_match(&xs, &comps[..usize::from(*used)], p) {
+        Some(k) => update_matched(&xs, comps, usize::from(*used), k, rate_w, phase1, p),
+        None => replace_weakest(&xs, comps, used, p),
     };
     let nu = usize::from(*used);
     // Only component k changed its key relative to the others (the rest were scaled alike),
@@ -495,30 +448,118 @@ fn update_pixel<const C: usize>(
         }
     }
     if pos < b {
-        return BACKGROUND;
+        BACKGROUND
+    } else if p.shadows && is_shadow(&xs, &comps[..b], p) {
+        SHADOW
+    } else {
+        FOREGROUND
     }
-    if p.shadows {
-        for c in &comps[..b] {
-            let (mut xm, mut mm) = (0.0, 0.0);
-            for ch in 0..C {
-                xm += xs[ch] * c.mean[ch];
-                mm += c.mean[ch] * c.mean[ch];
-            }
-            if mm <= 0.0 {
-                continue;
-            }
-            let a = xm / mm;
-            if a >= p.tau_lo && a <= p.tau_hi {
-                let mut cd2 = 0.0;
-                for ch in 0..C {
-                    let d = xs[ch] - a * c.mean[ch];
-                    cd2 += d * d;
-                }
-                if cd2 < p.cd2 * var_sum(c) {
-                    return SHADOW;
-                }
-            }
+}
+
+/// The first component (in ω/σ order) within λ standard deviations of `xs`.
+#[inline]
+#[expect(
+    clippy::needless_range_loop,
+    reason = "channel loops index x and μ together, as the equations do"
+)]
+fn first_match<const C: usize>(xs: &[f32; C], comps: &[Comp<C>], p: &Params) -> Option<usize> {
+    comps.iter().position(|c| {
+        let mut d2 = 0.0;
+        for ch in 0..C {
+            let d = xs[ch] - c.mean[ch];
+            d2 += d * d;
         }
+        d2 < p.lambda2 * var_sum(c)
+    })
+}
+
+/// Weights towards the match k (the others towards 0), and k's mean and variance towards
+/// `xs` at 1/n in the first L frames, 1/(L ω) after (the paper's two phases).
+#[inline]
+#[expect(
+    clippy::needless_range_loop,
+    reason = "channel loops index x, μ and σ² together, as the equations do"
+)]
+fn update_matched<const C: usize>(
+    xs: &[f32; C],
+    comps: &mut [Comp<C>],
+    nu: usize,
+    k: usize,
+    rate_w: f32,
+    phase1: bool,
+    p: &Params,
+) -> usize {
+    for (i, c) in comps[..nu].iter_mut().enumerate() {
+        let target = if i == k { 1.0 } else { 0.0 };
+        c.w += (target - c.w) * rate_w;
     }
-    FOREGROUND
+    let c = &mut comps[k];
+    c.n += 1.0;
+    let rho = if phase1 { 1.0 / c.n } else { 1.0 / (p.l * c.w) };
+    for ch in 0..C {
+        let d = xs[ch] - c.mean[ch];
+        c.mean[ch] += rho * d;
+        c.var[ch] = (c.var[ch] + rho * (d * d - c.var[ch])).max(p.var_min);
+    }
+    k
+}
+
+/// No match: a new component at `xs` (the last, weakest one replaced when all K are used),
+/// weights renormalised; returns its index.
+#[inline]
+fn replace_weakest<const C: usize>(
+    xs: &[f32; C],
+    comps: &mut [Comp<C>],
+    used: &mut u8,
+    p: &Params,
+) -> usize {
+    let nu = usize::from(*used);
+    let k = if nu < p.k {
+        *used += 1;
+        nu
+    } else {
+        nu - 1
+    };
+    comps[k] = Comp {
+        w: p.w0,
+        n: 1.0,
+        mean: *xs,
+        var: [p.var0; C],
+    };
+    let nu = usize::from(*used);
+    let sum: f32 = comps[..nu].iter().map(|c| c.w).sum();
+    for c in &mut comps[..nu] {
+        c.w /= sum;
+    }
+    k
+}
+
+/// Whether `xs` is a shadow on one of the background components: a brightness ratio a in
+/// [τ_lo, τ_hi] and a colour distance from a·μ within the shadow threshold.
+#[inline]
+#[expect(
+    clippy::needless_range_loop,
+    reason = "channel loops index x and μ together, as the equations do"
+)]
+fn is_shadow<const C: usize>(xs: &[f32; C], background: &[Comp<C>], p: &Params) -> bool {
+    background.iter().any(|c| {
+        let (mut xm, mut mm) = (0.0, 0.0);
+        for ch in 0..C {
+            xm += xs[ch] * c.mean[ch];
+            mm += c.mean[ch] * c.mean[ch];
+        }
+        if mm <= 0.0 {
+            return false;
+        }
+        let a = xm / mm;
+        if !(a >= p.tau_lo && a <= p.tau_hi) {
+            return false;
+        }
+        let mut cd2 = 0.0;
+        for ch in 0..C {
+            let d = xs[ch] - a * c.mean[ch];
+            cd2 += d * d;
+        }
+        cd2 < p.cd2 * var_sum(c)
+    })
 }
