@@ -6,7 +6,7 @@ use plotters::prelude::*;
 use scenarios::{BAR_WIDTH, Chart, Series, Style, YAxis};
 
 /// Matplotlib's "tab10" colours: distinct on white and for most colour-blind readers.
-const PALETTE: [RGBColor; 8] = [
+const PALETTE: [RGBColor; 10] = [
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
     RGBColor(44, 160, 44),
@@ -15,7 +15,13 @@ const PALETTE: [RGBColor; 8] = [
     RGBColor(140, 86, 75),
     RGBColor(227, 119, 194),
     RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
 ];
+
+/// Tick labels and axis titles, px (at 11 px and under, ticks were hard to read).
+const TICK_FONT: u32 = 14;
+const AXIS_FONT: u32 = 16;
 
 fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     let (lo, hi) = values
@@ -62,6 +68,11 @@ pub fn render(chart: &Chart) -> Result<String> {
         root.fill(&WHITE).map_err(|e| to_err(&e))?;
         let (plot_area, legend_area) = root.split_horizontally(PLOT_W);
         let ((x0, x1), (y0, y1)) = data_ranges(&chart.series);
+        let ((x0, x1), (y0, y1)) = if chart.equal_aspect {
+            equal_aspect((x0, x1), (y0, y1))
+        } else {
+            ((x0, x1), (y0, y1))
+        };
         let y_range = match chart.y_axis {
             YAxis::Up => y0..y1,
             YAxis::Down => y1..y0,
@@ -69,8 +80,8 @@ pub fn render(chart: &Chart) -> Result<String> {
         let mut plot = ChartBuilder::on(&plot_area)
             .caption(&axes.title, ("sans-serif", 18))
             .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(64)
+            .x_label_area_size(46)
+            .y_label_area_size(72)
             .build_cartesian_2d(x0..x1, y_range)
             .map_err(|e| to_err(&e))?;
         plot.configure_mesh()
@@ -78,6 +89,8 @@ pub fn render(chart: &Chart) -> Result<String> {
             .y_desc(&axes.y)
             .x_label_formatter(&|v| tick(*v))
             .y_label_formatter(&|v| tick(*v))
+            .label_style(("sans-serif", TICK_FONT))
+            .axis_desc_style(("sans-serif", AXIS_FONT))
             .light_line_style(WHITE.mix(0.0))
             .bold_line_style(BLACK.mix(0.08))
             .draw()
@@ -139,9 +152,28 @@ type Plot<'a, 'b> = ChartContext<
 >;
 type PlotError<'b> = DrawingAreaErrorKind<<SVGBackend<'b> as DrawingBackend>::ErrorType>;
 
-/// Every series in its style.
+/// The inner plotting area, px: the plot less its margins and label areas (as built above).
+const INNER_W: f64 = (PLOT_W - 2 * 12 - 72) as f64;
+const INNER_H: f64 = (HEIGHT - 2 * 12 - 46 - 30) as f64;
+
+/// Ranges widened about their centres so that a unit of x and a unit of y are equally long in
+/// the inner plotting area.
+fn equal_aspect(x: (f64, f64), y: (f64, f64)) -> ((f64, f64), (f64, f64)) {
+    let per_px = ((x.1 - x.0) / INNER_W).max((y.1 - y.0) / INNER_H);
+    let widen = |(lo, hi): (f64, f64), px: f64| {
+        let (mid, half) = ((lo + hi) / 2.0, per_px * px / 2.0);
+        (mid - half, mid + half)
+    };
+    (widen(x, INNER_W), widen(y, INNER_H))
+}
+
+/// Every series in its style, those in front last.
 fn draw_series<'b>(plot: &mut Plot<'_, 'b>, series: &[Series]) -> Result<(), PlotError<'b>> {
-    for s in series {
+    let ordered = series
+        .iter()
+        .filter(|s| !s.front)
+        .chain(series.iter().filter(|s| s.front));
+    for s in ordered {
         let (colour, width) = look(s);
         match s.style {
             Style::Line | Style::ThinLine | Style::Faint => plot.draw_series(LineSeries::new(
@@ -200,6 +232,34 @@ fn look(s: &Series) -> (RGBAColor, u32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn equal_aspect_makes_units_equally_long() {
+        let ((x0, x1), (y0, y1)) = equal_aspect((0.0, 10.0), (0.0, 100.0));
+        let (x_per_px, y_per_px) = ((x1 - x0) / INNER_W, (y1 - y0) / INNER_H);
+        assert!((x_per_px - y_per_px).abs() < 1e-12, "{x_per_px} {y_per_px}");
+        // The data still fit, centred.
+        assert!(x0 <= 0.0 && x1 >= 10.0 && (y0 - 0.0).abs() < 1e-9 && (y1 - 100.0).abs() < 1e-9);
+        assert!(((x0 + x1) / 2.0 - 5.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn front_series_are_drawn_last() {
+        let chart = Chart::new(
+            "map",
+            "x",
+            "y",
+            vec![
+                Series::new("truth", vec![(0.0, 0.0), (1.0, 1.0)], Style::Line, 3).in_front(),
+                Series::new("estimate", vec![(0.0, 1.0), (1.0, 0.0)], Style::Line, 0),
+            ],
+        );
+        let svg = render(&chart).unwrap();
+        // tab10's blue (estimate) is drawn before its red (truth).
+        let blue = svg.find("#1F77B4").unwrap();
+        let red = svg.find("#D62728").unwrap();
+        assert!(blue < red, "{svg}");
+    }
 
     #[test]
     fn ticks_drop_needless_decimals() {

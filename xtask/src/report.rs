@@ -144,6 +144,7 @@ fn paper_of(pipeline: &str) -> (&'static str, &'static str) {
     reason = "the report's tables are printed on the terminal"
 )]
 pub fn run(out_dir: &Path, filter: Option<&str>, screenshots: bool) -> Outcome {
+    let start = std::time::Instant::now();
     let scenarios = scenario::load_all(filter)?;
     let results = scenario::run_all(scenarios);
     for r in &results {
@@ -167,6 +168,14 @@ pub fn run(out_dir: &Path, filter: Option<&str>, screenshots: bool) -> Outcome {
     if screenshots {
         screenshot::take(out_dir, &pages)?;
     }
+    let failed = verdicts.iter().filter(|v| !v.passed()).count();
+    println!(
+        "report: {} scenarios, {} passed, {failed} failed; {} pages; {:.0} s in all",
+        verdicts.len(),
+        verdicts.len() - failed,
+        pages.len(),
+        start.elapsed().as_secs_f64()
+    );
     Ok(ok)
 }
 

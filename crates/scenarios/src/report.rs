@@ -72,6 +72,9 @@ pub struct Chart {
     pub series: Vec<Series>,
     /// Which way y grows on the page.
     pub y_axis: YAxis,
+    /// One unit of x is as long on the page as one unit of y (maps and polar plots, where an
+    /// angle or a circle must look like one).
+    pub equal_aspect: bool,
 }
 
 impl Chart {
@@ -85,7 +88,15 @@ impl Chart {
             },
             series,
             y_axis: YAxis::Up,
+            equal_aspect: false,
         }
+    }
+
+    /// The same chart at equal aspect: the ranges widen so that a unit of x and of y are
+    /// equally long on the page.
+    pub fn with_equal_aspect(mut self) -> Self {
+        self.equal_aspect = true;
+        self
     }
 
     /// The same chart in image coordinates: y grows downward, as in the image.
@@ -147,6 +158,8 @@ pub struct Series {
     pub style: Style,
     /// Palette index (same index, same colour).
     pub colour: usize,
+    /// Drawn after every series that is not (truth over the estimates that would hide it).
+    pub front: bool,
 }
 
 impl Series {
@@ -157,7 +170,14 @@ impl Series {
             points,
             style,
             colour,
+            front: false,
         }
+    }
+
+    /// The same series drawn over the others.
+    pub fn in_front(mut self) -> Self {
+        self.front = true;
+        self
     }
 }
 
