@@ -113,9 +113,14 @@ fn load_file(path: &Path) -> Result<ScenarioFile> {
 }
 
 /// Runs scenarios in parallel (each on its own seeded generator), returning results in name
-/// order. A progress bar per scenario is drawn when stderr is a terminal.
+/// order. A progress bar per scenario is drawn when stderr is a terminal; otherwise (a CI log,
+/// a pipe) a line when each scenario finishes, so a long run is never silent.
+#[expect(clippy::print_stderr, reason = "progress lines when stderr is not a terminal")]
 pub fn run_all(scenarios: Vec<Scenario>) -> Vec<RunResult> {
-    let multi = MultiProgress::with_draw_target(if std::io::stderr().is_terminal() {
+    let terminal = std::io::stderr().is_terminal();
+    let total = scenarios.len();
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let multi = MultiProgress::with_draw_target(if terminal {
         ProgressDrawTarget::stderr()
     } else {
         ProgressDrawTarget::hidden()
@@ -140,6 +145,14 @@ pub fn run_all(scenarios: Vec<Scenario>) -> Vec<RunResult> {
             )
             .with_context(|| format!("scenario {}", scenario.name));
             bar.0.finish_and_clear();
+            if !terminal {
+                let n = 1 + done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                eprintln!(
+                    "[{n}/{total}] {} {:.1} s",
+                    scenario.name,
+                    start.elapsed().as_secs_f64()
+                );
+            }
             RunResult {
                 scenario,
                 output,
