@@ -113,6 +113,8 @@ pub struct Snapshot {
     pub before: BeliefMatrix,
     /// After.
     pub after: BeliefMatrix,
+    /// H(before) − H(after), nats: the snapshot kept is the read that lowered it most.
+    pub entropy_drop_nats: f64,
 }
 
 /// The identity layer's output.
@@ -869,8 +871,9 @@ impl Layer {
 
     /// Incorporates `read` about track `l` of sensor `s` (see [`read_information`] and
     /// [`ReadRule`]) and logs it; a read identity-mgmt refuses is logged and leaves the
-    /// matrix as it was. The first read at a matrix with at least two tracks and positive
-    /// entropy is kept as the run's snapshot.
+    /// matrix as it was. Of the reads at a matrix with at least two tracks, the one that
+    /// lowered its entropy most is kept as the run's snapshot (the first such read often
+    /// changed it by less than a table's third decimal, so before and after looked alike).
     fn take_read(
         &mut self,
         config: &DmtimConfig,
@@ -886,12 +889,19 @@ impl Layer {
         let before = node.beliefs.clone();
         let kind = match apply_read(&mut node.beliefs, TrackId(l), &info, read.identity, config) {
             Ok((rule, h_before, h_after)) => {
-                if self.run.snapshot.is_none() && before.n_tracks() >= 2 && h_before > 1e-6 {
+                let drop = h_before - h_after;
+                let best = self
+                    .run
+                    .snapshot
+                    .as_ref()
+                    .map_or(0.0, |s| s.entropy_drop_nats);
+                if before.n_tracks() >= 2 && drop > best {
                     self.run.snapshot = Some(Snapshot {
                         frame: frame as u64,
                         sensor: s,
                         before,
                         after: node.beliefs.clone(),
+                        entropy_drop_nats: drop,
                     });
                 }
                 EventKind::LocalInformation {

@@ -204,6 +204,32 @@ pub struct Headline {
     pub peer: Option<String>,
 }
 
+impl Headline {
+    /// A headline read from a run's metrics: `ours` is a metric key and the key of its 95 %
+    /// CI half-width, if any; `peer` names the compared method and its keys the same way.
+    /// A key the run lacks reads as NaN, which the report shows (it never hides a row).
+    pub(crate) fn of_metrics(
+        metrics: &Metrics,
+        quantity: &str,
+        ours: (&str, Option<&str>),
+        peer: Option<(&str, &str, Option<&str>)>,
+    ) -> Self {
+        let value = |key: &str, ci: Option<&str>| {
+            let get = |k: &str| metrics.get(k).copied().unwrap_or(f64::NAN);
+            match ci {
+                Some(ci) => format!("{} ± {}", fmt_num(get(key)), fmt_num(get(ci))),
+                None => fmt_num(get(key)),
+            }
+        };
+        Self {
+            quantity: quantity.to_string(),
+            paper: None,
+            ours: value(ours.0, ours.1),
+            peer: peer.map(|(name, key, ci)| format!("{name}: {}", value(key, ci))),
+        }
+    }
+}
+
 /// A statement about a result, and whether this run bears it out.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Claim {

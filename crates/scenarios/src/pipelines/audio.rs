@@ -20,7 +20,9 @@ use sensors_audio::{
 use serde::Deserialize;
 use tracker_model::{LikelihoodGrid, PeakConfig, Region2, Vec2, wrap_angle_rad};
 
-use crate::{Chart, Claim, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
+use crate::{
+    Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table, fmt_num,
+};
 
 /// The `audio-doa` pipeline.
 pub struct AudioDoa;
@@ -417,6 +419,38 @@ impl Pipeline for AudioDoa {
         })
     }
 
+    fn headlines(out: &Output) -> Vec<Headline> {
+        let m = Self::metrics(out);
+        vec![
+            Headline::of_metrics(
+                &m,
+                "DOA error (°) at 10 dB SNR, time-domain delay-and-sum",
+                (
+                    "doa_error_deg_time_domain_ds_snr_10",
+                    Some("doa_error_ci95_deg_time_domain_ds_snr_10"),
+                ),
+                Some((
+                    "SRP-PHAT",
+                    "doa_error_deg_srp_phat_snr_10",
+                    Some("doa_error_ci95_deg_srp_phat_snr_10"),
+                )),
+            ),
+            Headline::of_metrics(
+                &m,
+                "fused-grid peak error (m), six nodes",
+                (
+                    "fused_peak_error_m_6_nodes",
+                    Some("fused_peak_error_ci95_m_6_nodes"),
+                ),
+                Some((
+                    "one node",
+                    "fused_peak_error_m_1_nodes",
+                    Some("fused_peak_error_ci95_m_1_nodes"),
+                )),
+            ),
+        ]
+    }
+
     fn metrics(out: &Output) -> Metrics {
         let mut metrics = Metrics::new();
         for (m, (name, _, _)) in METHODS.iter().enumerate() {
@@ -641,19 +675,28 @@ fn polar_chart(title: &str, bfs: &[Beamform], truths: &[f64]) -> Chart {
         .collect();
     for t in truths {
         let a = t.to_radians();
-        series.push(Series::new(
-            "",
-            vec![(0.0, 0.0), (1.1 * a.cos(), 1.1 * a.sin())],
-            Style::ThinLine,
-            7,
-        ));
+        series.push(
+            Series::new(
+                "true bearing",
+                vec![(0.0, 0.0), (1.1 * a.cos(), 1.1 * a.sin())],
+                Style::Line,
+                7,
+            )
+            .in_front(),
+        );
     }
+    // The true bearings in the legend once.
+    for s in series.iter_mut().filter(|s| s.colour == 7).skip(1) {
+        s.label.clear();
+    }
+    // Equal aspect: a 50° ray drawn at 50°.
     Chart::new(
         title,
         "(E − min)/(max − min) · cos θ",
         "(E − min)/(max − min) · sin θ",
         series,
     )
+    .with_equal_aspect()
 }
 
 /// The "grid-transect" chart: the fused likelihood along the road through the vehicle for

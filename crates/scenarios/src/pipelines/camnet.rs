@@ -1040,7 +1040,7 @@ fn top_view_figure(r: &RunScore) -> Figure {
     Figure::new(
         "camnet_top_view",
         "Top view of run 0: walking paths (grey), true cameras and the estimate after similarity alignment, with a wedge along each optical axis",
-        Chart::new("Cameras from above", "x (m)", "y (m)", series),
+        Chart::new("Cameras from above", "x (m)", "y (m)", series).with_equal_aspect(),
     )
 }
 

@@ -15,7 +15,9 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::Deserialize;
 
-use crate::{Chart, Claim, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
+use crate::{
+    Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table, fmt_num,
+};
 
 /// The `dmtim-seven-radars` pipeline.
 pub struct DmtimSevenRadars;
@@ -167,6 +169,16 @@ impl Pipeline for DmtimSevenRadars {
         })
     }
 
+    fn headlines(o: &Output) -> Vec<Headline> {
+        let m = Self::metrics(o);
+        vec![Headline::of_metrics(
+            &m,
+            "identities right at the reads (Chernoff fusion of the beliefs)",
+            ("chernoff.correct_fraction", None),
+            Some(("no fusion", "no_fusion.correct_fraction", None)),
+        )]
+    }
+
     fn metrics(o: &Output) -> Metrics {
         let mut m = Metrics::new();
         for (v, key) in KEYS.iter().enumerate() {
@@ -202,7 +214,7 @@ impl Pipeline for DmtimSevenRadars {
         // Belief matrices before and after local information.
         if let Some(snap) = &o.runs[0].variants[OURS].snapshot {
             s.tables.push(matrix_table(
-                &format!("{}'s belief matrix at frame {} before the local information (rows identities, columns tracks)", o.sensors[snap.sensor].name, snap.frame),
+                &format!("{}'s belief matrix at frame {} before the local information that lowered its entropy most in run 1 (by {} nats; rows identities, columns tracks)", o.sensors[snap.sensor].name, snap.frame, fmt_num(snap.entropy_drop_nats)),
                 &snap.before,
             ));
             s.tables.push(matrix_table(
@@ -217,24 +229,22 @@ impl Pipeline for DmtimSevenRadars {
         s
     }
 
+    /// Both claims are made on every run, whatever it shows (they were once added only when
+    /// they held, so they could not fail).
     fn claims(o: &Output) -> Vec<Claim> {
-        let mut claims = Vec::new();
         let drops = read_drops(o, OURS);
         let (d, ci) = mean_ci(&drops);
-        if !drops.is_empty() && d + ci < 0.0 {
-            claims.push(Claim::new(
-                "entropy falls when local information arrives (mean change of H(B) at a read < 0, 95 % CI)",
-                d + ci < 0.0,
-            ));
-        }
         let (diff, dci) = paired(o, OURS, NEAREST);
-        if diff - dci > 0.0 {
-            claims.push(Claim::new(
+        vec![
+            Claim::new(
+                "entropy falls when local information arrives (mean change of H(B) at a read < 0, 95 % CI)",
+                !drops.is_empty() && d + ci < 0.0,
+            ),
+            Claim::new(
                 "identity is kept better than by the nearest-track baseline (paired difference of the correct fraction > 0, 95 % CI)",
                 diff - dci > 0.0,
-            ));
-        }
-        claims
+            ),
+        ]
     }
 }
 
@@ -263,12 +273,9 @@ fn map_figure(o: &Output) -> Figure {
     }
     for (k, t) in o.truth.iter().enumerate() {
         let pts = t.positions.iter().map(|p| (p.x, p.y)).collect();
-        series.push(Series::new(
-            &format!("truth T{}", t.identity.0),
-            pts,
-            Style::Line,
-            1 + k,
-        ));
+        series.push(
+            Series::new(&format!("truth T{}", t.identity.0), pts, Style::Line, 1 + k).in_front(),
+        );
     }
     for (sensor, tracks) in o.runs[0].tracks.iter().enumerate() {
         let pts: Vec<(f64, f64)> = tracks.iter().flatten().copied().collect();
@@ -286,7 +293,7 @@ fn map_figure(o: &Output) -> Figure {
     Figure::new(
         "dmtim-map",
         "Radars ATC1–ATC7 (ATC7 in the centre) with their ranges, the five aircraft's true paths and every radar's track estimates in run 1.",
-        Chart::new("Seven radars and five aircraft", "x", "y", series),
+        Chart::new("Seven radars and five aircraft", "x", "y", series).with_equal_aspect(),
     )
 }
 

@@ -1009,15 +1009,12 @@ fn length_chart(out: &Output) -> Chart {
             band.0.push((len, m - ci));
             band.1.push((len, m + ci));
         }
-        let style = if colour == 0 {
-            Style::Line
-        } else {
-            Style::ThinLine
-        };
-        series.push(Series::new(METHODS[k].1, pts, style, colour));
+        // Every method in a full colour of its own (pale shades of the baselines were hard
+        // to tell apart); ours's CI in thin lines of its colour.
+        series.push(Series::new(METHODS[k].1, pts, Style::Line, colour));
         if colour == 0 {
-            series.push(Series::new("ours ± 95 % CI", band.0, Style::ThinLine, 7));
-            series.push(Series::new("", band.1, Style::ThinLine, 7));
+            series.push(Series::new("ours ± 95 % CI", band.0, Style::ThinLine, 0));
+            series.push(Series::new("", band.1, Style::ThinLine, 0));
         }
     }
     Chart::new(
@@ -1062,7 +1059,7 @@ fn band_chart(out: &Output) -> Chart {
         .collect();
     let mut series = vec![
         Series::new("observed", near, Style::Markers, 7),
-        Series::new("truth", frame_x(&case.hidden), Style::Line, 5),
+        Series::new("truth", frame_x(&case.hidden), Style::Line, 5).in_front(),
     ];
     for (c, key) in DRAWN.iter().enumerate() {
         let k = method(key);
@@ -1073,12 +1070,7 @@ fn band_chart(out: &Output) -> Chart {
             .zip(&r.positions)
             .map(|(f, q)| (f64::from(*f), q.x))
             .collect();
-        series.push(Series::new(
-            METHODS[k].1,
-            pts,
-            if c == 0 { Style::Line } else { Style::ThinLine },
-            c,
-        ));
+        series.push(Series::new(METHODS[k].1, pts, Style::Line, c));
         if c == 0 {
             for sign in [-2.0, 2.0] {
                 let band = r
@@ -1092,7 +1084,7 @@ fn band_chart(out: &Output) -> Chart {
                     if sign < 0.0 { "ours ± 2σ" } else { "" },
                     band,
                     Style::ThinLine,
-                    4,
+                    0,
                 ));
             }
         }
@@ -1133,7 +1125,7 @@ fn path_chart(out: &Output) -> Chart {
             Style::Markers,
             7,
         ),
-        Series::new("truth", xy(&case.hidden), Style::Line, 5),
+        Series::new("truth", xy(&case.hidden), Style::Line, 5).in_front(),
     ];
     for (c, key) in DRAWN.iter().enumerate() {
         let k = method(key);
@@ -1151,6 +1143,7 @@ fn path_chart(out: &Output) -> Chart {
         series,
     )
     .in_image_coordinates()
+    .with_equal_aspect()
 }
 
 /// The orderings the report states, each checked on this run.

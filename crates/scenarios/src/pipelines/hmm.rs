@@ -801,11 +801,13 @@ fn error_chart(out: &Output) -> Chart {
             Style::Line,
             c,
         ));
+        // A colour of its own (after the models' Viterbi colours): the two estimators of a
+        // model are what the chart compares, and a paler shade of one colour hid that.
         err_series.push(Series::new(
             &format!("{}, posterior", m.name),
             pts(&m.posterior_curve),
-            Style::ThinLine,
-            c,
+            Style::Line,
+            c + out.models.len(),
         ));
     }
     Chart::new(
@@ -844,12 +846,16 @@ fn map_chart(out: &Output) -> Chart {
             .map(|q| (q.x + offset, q.y + offset))
             .collect()
     };
-    map_series.push(Series::new(
-        "true path",
-        path_points(&out.true_path, 0.0),
-        Style::Line,
-        3,
-    ));
+    // The truth over the estimates, in grey (the models take the colours).
+    map_series.push(
+        Series::new(
+            "true path",
+            path_points(&out.true_path, 0.0),
+            Style::Line,
+            7,
+        )
+        .in_front(),
+    );
     for (c, m) in out.models.iter().enumerate() {
         map_series.push(Series::new(
             &format!("{} (Viterbi)", m.name),
@@ -858,7 +864,7 @@ fn map_chart(out: &Output) -> Chart {
             c,
         ));
     }
-    Chart::new("Test sequence 0 on the map", "x (m)", "y (m)", map_series)
+    Chart::new("Test sequence 0 on the map", "x (m)", "y (m)", map_series).with_equal_aspect()
 }
 
 /// Mean error of the learned model against K with its 95 % CI band, Viterbi and posterior

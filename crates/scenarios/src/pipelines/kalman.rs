@@ -435,12 +435,15 @@ fn track_chart(run0: &[TargetRun]) -> Chart {
     for (i, t) in run0.iter().enumerate() {
         let pos = |v: &Vector4<f64>| (v[0], v[1]);
         let suffix = |s: &str| if i == 0 { s.to_string() } else { String::new() };
-        series.push(Series::new(
-            &suffix("truth"),
-            t.truth.iter().map(pos).collect(),
-            Style::Line,
-            2,
-        ));
+        series.push(
+            Series::new(
+                &suffix("truth"),
+                t.truth.iter().map(pos).collect(),
+                Style::ThinLine,
+                2,
+            )
+            .in_front(),
+        );
         series.push(Series::new(
             &suffix("measurements"),
             t.measurements
@@ -470,4 +473,5 @@ fn track_chart(run0: &[TargetRun]) -> Chart {
         "y (length units)",
         series,
     )
+    .with_equal_aspect()
 }

@@ -1235,15 +1235,12 @@ fn cardinality_chart(out: &Output) -> Chart {
         "frame",
         "count",
         vec![
-            Series::new("people", truth_count, Style::Line, 7),
-            Series::new(
-                "global-only SMC-PHD",
-                count(&global.frames),
-                Style::ThinLine,
-                0,
-            ),
+            // Each filter in its own full colour (they are what is compared), the truth over
+            // them in grey.
+            Series::new("global-only SMC-PHD", count(&global.frames), Style::Line, 0),
             Series::new("fused SMC-PHD", count(&fused.frames), Style::Line, 1),
-            Series::new("GM-PHD", count(&gm.frames), Style::ThinLine, 2),
+            Series::new("GM-PHD", count(&gm.frames), Style::Line, 2),
+            Series::new("people", truth_count, Style::ThinLine, 7).in_front(),
         ],
     )
 }

@@ -17,7 +17,9 @@ use sensors_video::{
 use serde::Deserialize;
 
 use crate::pipelines::mcmcda::mean_ci;
-use crate::{Chart, Claim, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
+use crate::{
+    Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table, fmt_num,
+};
 
 /// The `video-mog` pipeline.
 pub struct VideoMog;
@@ -289,6 +291,30 @@ impl Pipeline for VideoMog {
         Ok(out)
     }
 
+    fn headlines(out: &Output) -> Vec<Headline> {
+        let m = Self::metrics(out);
+        vec![
+            Headline::of_metrics(
+                &m,
+                "foreground F-measure (background mixture, shadows removed)",
+                (
+                    "foreground_f_measure_mean",
+                    Some("foreground_f_measure_ci95"),
+                ),
+                None,
+            ),
+            Headline::of_metrics(
+                &m,
+                "shadow pixels recognised as shadow",
+                (
+                    "foreground_shadow_rate_mean",
+                    Some("foreground_shadow_rate_ci95"),
+                ),
+                None,
+            ),
+        ]
+    }
+
     fn metrics(out: &Output) -> Metrics {
         let mut m = Metrics::new();
         let stat = |f: fn(&RunScore) -> f64| mean_ci(out.runs.iter().map(f));
@@ -407,13 +433,32 @@ fn mask_figure(out: &Output) -> Figure {
             "column (px)",
             "row (px, growing downward)",
             vec![
-                Series::new("truth", out.truth_px.clone(), Style::Markers, 7),
+                Series::new("truth inside", out.truth_px.clone(), Style::Markers, 7),
                 Series::new("detected", out.detected_px.clone(), Style::Markers, 0),
                 Series::new("shadow label", out.shadow_px.clone(), Style::Markers, 2),
+                // The truth's edge over the detections, which would hide its inside.
+                Series::new("truth edge", edge(&out.truth_px), Style::Markers, 3).in_front(),
             ],
         )
-        .in_image_coordinates(),
+        .in_image_coordinates()
+        .with_equal_aspect(),
     )
+}
+
+/// The pixels of `pixels` with a 4-neighbour outside the set: the region's edge.
+fn edge(pixels: &[(f64, f64)]) -> Vec<(f64, f64)> {
+    let key = |(x, y): (f64, f64)| (x.round() as i64, y.round() as i64);
+    let set: std::collections::HashSet<(i64, i64)> = pixels.iter().map(|&p| key(p)).collect();
+    pixels
+        .iter()
+        .copied()
+        .filter(|&p| {
+            let (x, y) = key(p);
+            [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                .iter()
+                .any(|(dx, dy)| !set.contains(&(x + dx, y + dy)))
+        })
+        .collect()
 }
 
 /// The "angle-profile" figure: the detection function of Kushwaha et al.'s camera node (MFI

@@ -9,7 +9,9 @@ use tracker_model::SimulationConfig;
 use super::{
     RunScores, Stat, Trackers, Tuned, Tuning, Variant, paired, pm, run_grid, ties_and_losses,
 };
-use crate::{Chart, Claim, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
+use crate::{
+    Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table, fmt_num,
+};
 
 /// The `mcmcda-batch` pipeline.
 pub struct Batch;
@@ -157,6 +159,32 @@ impl Pipeline for Batch {
             variants,
             groups,
         })
+    }
+
+    fn headlines(out: &Output) -> Vec<Headline> {
+        let Some(k) = out.groups.iter().map(|g| g.k).max() else {
+            return Vec::new();
+        };
+        let m = Self::metrics(out);
+        let key = |what: &str, who: &str| format!("k{k}_{what}_{who}");
+        let ci = |what: &str, who: &str| format!("k{k}_{what}_{who}_ci95");
+        ["f1", "gospa"]
+            .into_iter()
+            .map(|what| {
+                let quantity = match what {
+                    "f1" => format!("association F1, K = {k} targets, true model"),
+                    _ => format!("GOSPA (region units), K = {k} targets, true model"),
+                };
+                let (ours, ours_ci) = (key(what, "mcmcda"), ci(what, "mcmcda"));
+                let (gnn, gnn_ci) = (key(what, "gnn"), ci(what, "gnn"));
+                Headline::of_metrics(
+                    &m,
+                    &quantity,
+                    (&ours, Some(&ours_ci)),
+                    Some(("GNN, tuned", &gnn, Some(&gnn_ci))),
+                )
+            })
+            .collect()
     }
 
     fn metrics(out: &Output) -> Metrics {
@@ -485,7 +513,8 @@ type StatOf = fn(&KSummary) -> &Stat;
 
 /// F1 (without the oracle) and GOSPA against K, true model.
 fn figures(out: &Output) -> Vec<Figure> {
-    let series = |with_oracle: bool, f: fn(&Stat) -> f64| -> Vec<Series> {
+    // Each tracker's mean, and its 95 % CI as thin lines either side.
+    let series = |with_oracle: bool, f: fn(&Stat) -> (f64, f64)| -> Vec<Series> {
         let mut pick: Vec<(&str, StatOf)> = vec![
             ("MCMCDA", |g| &g.mcmcda[0]),
             ("GNN (tuned)", |g| &g.gnn[0]),
@@ -494,29 +523,35 @@ fn figures(out: &Output) -> Vec<Figure> {
         if with_oracle {
             pick.push(("oracle", |g| &g.oracle));
         }
-        pick.into_iter()
-            .enumerate()
-            .map(|(m, (name, get))| {
-                let pts = out
-                    .groups
+        let mut all = Vec::new();
+        for (m, (name, get)) in pick.into_iter().enumerate() {
+            let at = |side: f64| -> Vec<(f64, f64)> {
+                let value = |g| {
+                    let (mean, ci) = f(get(g));
+                    mean + side * ci
+                };
+                out.groups
                     .iter()
-                    .map(|g| (f64::from(g.k), f(get(g))))
-                    .collect();
-                Series::new(name, pts, Style::Line, m)
-            })
-            .collect()
+                    .map(|g| (f64::from(g.k), value(g)))
+                    .collect()
+            };
+            all.push(Series::new(name, at(0.0), Style::Line, m));
+            all.push(Series::new("", at(-1.0), Style::ThinLine, m));
+            all.push(Series::new("", at(1.0), Style::ThinLine, m));
+        }
+        all
     };
     let f1_chart = Chart::new(
-        "Association F1 against the number of targets",
+        "Association F1 against the number of targets (thin: 95 % CI of the mean)",
         "targets K",
         "F1",
-        series(false, |s| s.f1.0),
+        series(false, |s| s.f1),
     );
     let gospa_chart = Chart::new(
-        "Mean GOSPA against the number of targets",
+        "Mean GOSPA against the number of targets (thin: 95 % CI of the mean)",
         "targets K",
         "GOSPA (region units; c, p = 2)",
-        series(true, |s| s.gospa.0),
+        series(true, |s| s.gospa),
     );
     vec![
         Figure::new(

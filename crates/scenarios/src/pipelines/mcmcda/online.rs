@@ -10,7 +10,9 @@ use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use tracker_model::{Simulation, SimulationConfig, TrackPoint, TrackSet, Vec2};
 
-use crate::{Chart, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
+use crate::{
+    Chart, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table, fmt_num,
+};
 
 /// The `mcmcda-online` pipeline.
 pub struct Online;
@@ -155,6 +157,19 @@ impl Pipeline for Online {
         })
     }
 
+    fn headlines(out: &Output) -> Vec<Headline> {
+        let m = Self::metrics(out);
+        vec![
+            Headline::of_metrics(&m, "online MCMCDA: association F1", ("f1", None), None),
+            Headline::of_metrics(
+                &m,
+                "online MCMCDA: mean OSPA of the online estimates",
+                ("mean_ospa_online", None),
+                None,
+            ),
+        ]
+    }
+
     fn metrics(out: &Output) -> Metrics {
         let mut metrics = Metrics::new();
         metrics.insert("f1".into(), out.scores.f1);
@@ -174,14 +189,20 @@ impl Pipeline for Online {
         Section {
             title: "Online MCMCDA: the long example of TAC 2009".into(),
             summary: format!(
-                "Region [0, 100]², {} scans, λ_b V = {}, p_z = {}, p_d = {}, λ_f V = {}. After \
-                 each scan the chain runs on the last {} scans; a track is reported while its \
-                 last measurement is at most {} scans old. OSPA uses c = {}, p = 2.",
+                "Region [{}, {}] × [{}, {}], {} scans, λ_b V = {}, p_z = {}, p_d = {}, \
+                 λ_f V = {}. After each scan the chain runs {} samples on the last {} scans; a \
+                 track is reported while its last measurement is at most {} scans old. OSPA \
+                 uses c = {}, p = 2.",
+                sim.region.lower().x,
+                sim.region.upper().x,
+                sim.region.lower().y,
+                sim.region.upper().y,
                 sim.n_scans,
                 sim.births_per_scan,
                 sim.p_disappear,
                 sim.p_detect,
                 sim.clutter_per_scan,
+                out.online.samples_per_scan,
                 out.online.window,
                 out.online.coast_scans,
                 out.ospa_cutoff
@@ -194,13 +215,7 @@ impl Pipeline for Online {
 
 /// The scores of the run.
 fn table(out: &Output) -> Table {
-    let mut table = Table::new(
-        &format!(
-            "Online MCMCDA over {} scans (window {}, {} samples per scan)",
-            out.n_scans, out.online.window, out.online.samples_per_scan
-        ),
-        &["quantity", "value"],
-    );
+    let mut table = Table::new("Online MCMCDA's scores", &["quantity", "value"]);
     let scores = &out.scores;
     for (name, value) in [
         (
@@ -238,35 +253,54 @@ fn table(out: &Output) -> Table {
     table
 }
 
+/// The shortest track drawn: the final tracks include hundreds of two- and three-scan tracks
+/// of clutter, which would bury the picture.
+const MIN_DRAWN_SCANS: usize = 5;
+
 /// Tracks over the truth, OSPA over time, and the number of tracks against the truth.
 fn figures(out: &Output) -> Vec<Figure> {
     // Only the first series of each kind is named, so the legend has one entry per kind.
     let name = |i: usize, label: &'static str| if i == 0 { label } else { "" };
-    let mut series: Vec<Series> = out
-        .truth_paths
+    // Smoothed tracks may run a little past the region's edge; the map shows the region.
+    let region = &out.simulation.region;
+    let inside = |&(x, y): &(f64, f64)| region.contains(&tracker_model::Vec2::new(x, y));
+    let drawn: Vec<Vec<(f64, f64)>> = out
+        .track_paths
+        .iter()
+        .filter(|pts| pts.len() >= MIN_DRAWN_SCANS)
+        .map(|pts| pts.iter().copied().filter(inside).collect())
+        .collect();
+    let mut series: Vec<Series> = drawn
         .iter()
         .enumerate()
         .map(|(i, pts)| {
-            Series::new(
-                name(i, "true trajectories"),
-                pts.clone(),
-                Style::ThinLine,
-                7,
-            )
+            let label = name(i, "tracks of 5 scans or more");
+            Series::new(label, pts.clone(), Style::Line, i % 7)
         })
         .collect();
-    series.extend(
-        out.track_paths
-            .iter()
-            .enumerate()
-            .map(|(i, pts)| Series::new(name(i, "tracks"), pts.clone(), Style::Line, i % 7)),
-    );
+    // The truth on top, thin and grey, so that a track that follows it shows on both sides.
+    series.extend(out.truth_paths.iter().enumerate().map(|(i, pts)| {
+        Series::new(
+            name(i, "true trajectories"),
+            pts.clone(),
+            Style::ThinLine,
+            7,
+        )
+        .in_front()
+    }));
+    let corners = [region.lower(), region.upper()].map(|c| (c.x, c.y));
+    series.push(Series::new("", corners.to_vec(), Style::Markers, 7));
     let tracks_chart = Chart::new(
-        "Tracks (colours) over the true trajectories (grey)",
+        &format!(
+            "{} of {} tracks (5 scans or more; colours) under the true trajectories (grey)",
+            drawn.len(),
+            out.track_paths.len()
+        ),
         "x (region units)",
         "y (region units)",
         series,
-    );
+    )
+    .with_equal_aspect();
     let ospa_chart = Chart::new(
         "OSPA of the online estimates",
         "scan",

@@ -277,22 +277,27 @@ fn claims(out: &Output) -> Vec<Claim> {
 
 /// F1 of both trackers against p_d and against the clutter rate.
 fn figures(out: &Output) -> Vec<Figure> {
-    let curve = |by_pd: bool, m: usize| -> Vec<(f64, f64)> {
+    // The mean, and its 95 % CI as thin lines either side (sign −1, +1).
+    let curve = |by_pd: bool, m: usize, side: f64| -> Vec<(f64, f64)> {
         out.points
             .iter()
             .filter(|pt| pt.by_pd == by_pd)
-            .map(|pt| (pt.x, pt.f1[m].0))
+            .map(|pt| (pt.x, pt.f1[m].0 + side * pt.f1[m].1))
             .collect()
     };
     let f1_chart = |title: &str, x: &str, by_pd: bool| {
+        let mut series = Vec::new();
+        for (m, name) in [(0, "MCMCDA"), (1, "GNN (tuned)")] {
+            series.push(Series::new(name, curve(by_pd, m, 0.0), Style::Line, m));
+            for side in [-1.0, 1.0] {
+                series.push(Series::new("", curve(by_pd, m, side), Style::ThinLine, m));
+            }
+        }
         Chart::new(
-            title,
+            &format!("{title} (thin: 95 % CI of the mean)"),
             x,
             "F1",
-            vec![
-                Series::new("MCMCDA", curve(by_pd, 0), Style::Line, 0),
-                Series::new("GNN (tuned)", curve(by_pd, 1), Style::Line, 1),
-            ],
+            series,
         )
     };
     vec![
