@@ -78,13 +78,16 @@ pub enum Error {
         /// The approaches' keys, comma-separated.
         known: String,
     },
-    /// A list of approaches names something other than `all` or an approach index.
-    #[error("{given:?} is not `all` or an approach index 0..{n_approaches}")]
-    ApproachIndex {
+    /// A list of approaches names something other than `all`, an approach's index or an
+    /// approach's settings key.
+    #[error("{given:?} is not `all`, an approach index 0..{n_approaches} or one of {known}")]
+    ApproachListItem {
         /// The list's item.
         given: String,
         /// The number of approaches.
         n_approaches: usize,
+        /// The approaches' settings keys, comma-separated.
+        known: String,
     },
     /// An approach is scored but has no peak-score table.
     #[error("approach {approach} is scored but [params.multi_peak_scores] has no {approach}")]

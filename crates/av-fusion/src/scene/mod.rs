@@ -5,8 +5,9 @@
 //!
 //! * [`Params`]: the scene and the six approaches' settings, as deserialised from a
 //!   configuration's `[params]` table (unknown fields are rejected);
-//! * [`APPROACHES`]: audio, video and audio+video, each fused by the weighted sum or the
-//!   floored product, each with its own [`ApproachSettings`];
+//! * [`Approach`]: audio, video and audio+video, each fused by the weighted sum or the
+//!   floored product, each with its own [`ApproachSettings`] ([`Settings`], a
+//!   [`PerApproach`]);
 //! * [`simulate_run`]: the vehicles of a [`RunSpec`] through sensors-audio (engine-like
 //!   sources, ground reflection, diffuse background noise) and through the sensors-video
 //!   renderer and background mixture (cameras at an angle to the road, swaying foliage,
@@ -29,15 +30,17 @@ use tracker_model::{Region2, Vec2};
 use crate::error::invalid;
 use crate::tuning::{MultiTuning, ScoreFit, Tuning};
 use crate::{
-    AvConfig, Error, FusionConfig, FusionRule, LobeEqualisation, Modalities, PeakExtraction,
-    PeakScores, RangeFade, Result, SchedulerConfig, SensorNode, SumScaling, TrackerConfig,
+    AvConfig, Error, FusionConfig, FusionRule, LobeEqualisation, PeakExtraction, PeakScores,
+    RangeFade, Result, SchedulerConfig, SensorNode, SumScaling, TrackerConfig,
 };
 
+mod approach;
 mod score;
 mod sim;
 #[cfg(test)]
 mod tests;
 
+pub use approach::{Approach, PerApproach};
 pub use score::{Score, score, score_with};
 pub use sim::{RunSpec, Simulated, Vehicle, audio_poses, cameras, clock_offset_s, simulate_run};
 
@@ -190,49 +193,9 @@ fn one() -> f64 {
     1.0
 }
 
-/// The settings of the six approaches, in [`APPROACHES`] order.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Settings {
-    /// Audio, weighted sum.
-    pub audio_sum: ApproachSettings,
-    /// Video, weighted sum.
-    pub video_sum: ApproachSettings,
-    /// Audio+video, weighted sum.
-    pub audio_video_sum: ApproachSettings,
-    /// Audio, floored product.
-    pub audio_product: ApproachSettings,
-    /// Video, floored product.
-    pub video_product: ApproachSettings,
-    /// Audio+video, floored product.
-    pub audio_video_product: ApproachSettings,
-}
-
-impl Settings {
-    /// Approach `a`'s settings (an index into [`APPROACHES`]; 5 and above: the last).
-    pub fn get(&self, a: usize) -> &ApproachSettings {
-        match a {
-            0 => &self.audio_sum,
-            1 => &self.video_sum,
-            2 => &self.audio_video_sum,
-            3 => &self.audio_product,
-            4 => &self.video_product,
-            _ => &self.audio_video_product,
-        }
-    }
-
-    /// Approach `a`'s settings, to change.
-    pub fn get_mut(&mut self, a: usize) -> &mut ApproachSettings {
-        match a {
-            0 => &mut self.audio_sum,
-            1 => &mut self.video_sum,
-            2 => &mut self.audio_video_sum,
-            3 => &mut self.audio_product,
-            4 => &mut self.video_product,
-            _ => &mut self.audio_video_product,
-        }
-    }
-}
+/// The settings of the six approaches (`[params.settings]`, `[params.multi_settings]`: one
+/// table per approach, keyed by [`Approach::settings_key`]).
+pub type Settings = PerApproach<ApproachSettings>;
 
 /// The scene, the approaches' settings and how they were chosen.
 #[derive(Debug, Clone, Deserialize)]
@@ -289,17 +252,6 @@ pub struct Params {
     pub multi_tuning: MultiTuning,
 }
 
-/// The six approaches, modality × rule: (name, modalities, floored product rather than
-/// weighted sum).
-pub const APPROACHES: [(&str, Modalities, bool); 6] = [
-    ("audio, sum", Modalities::Audio, false),
-    ("video, sum", Modalities::Video, false),
-    ("audio+video, sum", Modalities::Both, false),
-    ("audio, product", Modalities::Audio, true),
-    ("video, product", Modalities::Video, true),
-    ("audio+video, product", Modalities::Both, true),
-];
-
 /// Heading errors of a run: acoustic nodes and cameras, degrees (signs alternate by node).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Calibration {
@@ -354,7 +306,7 @@ pub fn sensor_nodes(
 }
 
 /// Approach `a`'s settings for a run with one vehicle (`multi` false) or several.
-pub fn settings_of(p: &Params, a: usize, multi: bool) -> &ApproachSettings {
+pub fn settings_of(p: &Params, a: Approach, multi: bool) -> &ApproachSettings {
     if multi {
         p.multi_settings.get(a)
     } else {
@@ -362,32 +314,21 @@ pub fn settings_of(p: &Params, a: usize, multi: bool) -> &ApproachSettings {
     }
 }
 
-/// Approach `a`'s key in [`Params::settings`], [`Params::multi_settings`] and
-/// [`Params::multi_peak_scores`]: `audio_sum`, ..., `audio_video_product`.
-pub fn settings_key(a: usize) -> String {
-    APPROACHES[a]
-        .0
-        .replace([',', '+'], "")
-        .replace(' ', "_")
-        .to_lowercase()
-        .replace("__", "_")
-        .replace("audiovideo", "audio_video")
-}
-
 /// Approach `a`'s peak scores under settings `s` (none unless `s.scored`; only the
 /// multi-vehicle runs have tables).
 pub fn peak_scores_of<'p>(
     p: &'p Params,
-    a: usize,
+    a: Approach,
     s: &ApproachSettings,
 ) -> Result<Option<&'p PeakScores>> {
     if !s.scored {
         return Ok(None);
     }
-    let approach = settings_key(a);
-    match p.multi_peak_scores.get(&approach) {
+    match p.multi_peak_scores.get(a.settings_key()) {
         Some(table) => Ok(Some(table)),
-        None => Err(Error::MissingPeakScores { approach }),
+        None => Err(Error::MissingPeakScores {
+            approach: a.settings_key().to_string(),
+        }),
     }
 }
 
@@ -395,16 +336,15 @@ pub fn peak_scores_of<'p>(
 /// ones.
 pub fn av_config(
     p: &Params,
-    a: usize,
+    a: Approach,
     s: &ApproachSettings,
     scores: Option<&PeakScores>,
 ) -> Result<AvConfig> {
-    let (name, modalities, product) = APPROACHES[a];
-    let rule = if product {
+    let rule = if a.is_product() {
         let Some(floor) = s.product_floor else {
             return Err(invalid(
                 "product_floor",
-                format!("approach {name}: the product rule needs product_floor"),
+                format!("approach {a}: the product rule needs product_floor"),
             ));
         };
         FusionRule::Product { floor }
@@ -434,7 +374,7 @@ pub fn av_config(
             min_range_m: 0.5,
             range_fade: s.range_fade,
             rule,
-            modalities,
+            modalities: a.modalities(),
             peaks: PeakExtraction {
                 relative_threshold: s.relative_threshold,
                 suppression_radius_m: s.suppression_radius_m,
@@ -514,9 +454,9 @@ pub fn check_params(p: &Params, seed: u64) -> Result<()> {
         }
     }
     check_multi_beamform(&p.audio)?;
-    let keys: Vec<String> = (0..APPROACHES.len()).map(settings_key).collect();
     for (k, table) in &p.multi_peak_scores {
-        if !keys.contains(k) {
+        if Approach::from_settings_key(k).is_none() {
+            let keys = Approach::ALL.map(Approach::settings_key);
             return Err(Error::UnknownApproach {
                 name: k.clone(),
                 known: keys.join(", "),
@@ -527,14 +467,14 @@ pub fn check_params(p: &Params, seed: u64) -> Result<()> {
             source: Box::new(e),
         })?;
     }
-    for a in 0..APPROACHES.len() {
+    for a in Approach::ALL {
         // The tables are learnt on multi-vehicle runs, for those runs only.
         if p.settings.get(a).scored {
             return Err(invalid(
                 "scored",
                 format!(
                     "[params.settings.{}]: scored is for the multi-vehicle settings only",
-                    settings_key(a)
+                    a.settings_key()
                 ),
             ));
         }

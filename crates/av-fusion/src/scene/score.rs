@@ -8,8 +8,8 @@ use eval_metrics::{
 };
 
 use super::{
-    ApproachSettings, Calibration, Params, Simulated, av_config, peak_scores_of, sensor_nodes,
-    settings_of,
+    Approach, ApproachSettings, Calibration, Params, Simulated, av_config, peak_scores_of,
+    sensor_nodes, settings_of,
 };
 use crate::{AvRun, PeakScores, Result, track_reports};
 
@@ -33,7 +33,7 @@ pub fn score_with(
     p: &Params,
     sim: &Simulated,
     calib: Calibration,
-    a: usize,
+    a: Approach,
     s: &ApproachSettings,
     scores: Option<&PeakScores>,
 ) -> Result<Score> {
@@ -83,7 +83,7 @@ pub fn score_with(
 
 /// Approach `a` on one simulated run with its own settings for the run's vehicle count (and
 /// their peak scores).
-pub fn score(p: &Params, sim: &Simulated, calib: Calibration, a: usize) -> Result<Score> {
+pub fn score(p: &Params, sim: &Simulated, calib: Calibration, a: Approach) -> Result<Score> {
     let s = settings_of(p, a, sim.multi);
     score_with(p, sim, calib, a, s, peak_scores_of(p, a, s)?)
 }

@@ -3,6 +3,8 @@
 
 use sensors_audio::BeamformConfig;
 
+use crate::Modalities;
+
 use super::*;
 
 /// The committed configuration's parameters.
@@ -28,8 +30,8 @@ fn the_committed_parameters_pass() {
         run_specs(&p).expect("runs").len(),
         p.passes.len() + p.multi.len()
     );
-    assert_eq!(settings_key(2), "audio_video_sum");
-    assert_eq!(settings_key(3), "audio_product");
+    assert_eq!(Approach::AudioVideoSum.settings_key(), "audio_video_sum");
+    assert_eq!(Approach::AudioProduct.settings_key(), "audio_product");
 }
 
 #[test]
@@ -57,7 +59,7 @@ fn bad_score_settings_and_reused_seeds_are_rejected_before_any_run() {
     assert!(err.contains("unknown approach"), "{err}");
     // Scores in the single-vehicle settings.
     let mut p = good.clone();
-    p.settings.get_mut(5).scored = true;
+    p.settings.get_mut(Approach::AudioVideoProduct).scored = true;
     let err = rejected(&p, 1801);
     assert!(err.contains("multi-vehicle settings only"), "{err}");
     // A multi-vehicle beamformer with other beams, or a bad one.
@@ -88,4 +90,71 @@ fn vehicles_enter_the_region_on_their_lane_at_their_time() {
     let w = Vehicle::new(10.0, -1, 1.0);
     assert!((w.at(1.0) - Vec2::new(35.0, 11.5)).norm() < 1e-12);
     assert!((w.at(2.0) - Vec2::new(25.0, 11.5)).norm() < 1e-12);
+}
+
+#[test]
+fn approaches_keep_their_names_keys_and_order() {
+    // The names in reports and metric names, in the order of the report's columns.
+    let table = [
+        ("audio, sum", Modalities::Audio, false),
+        ("video, sum", Modalities::Video, false),
+        ("audio+video, sum", Modalities::Both, false),
+        ("audio, product", Modalities::Audio, true),
+        ("video, product", Modalities::Video, true),
+        ("audio+video, product", Modalities::Both, true),
+    ];
+    for (i, (a, (name, modalities, product))) in Approach::ALL.into_iter().zip(table).enumerate() {
+        assert_eq!(a.name(), name);
+        assert_eq!(a.to_string(), name);
+        assert_eq!(a.modalities(), modalities);
+        assert_eq!(a.is_product(), product);
+        assert_eq!(Approach::new(modalities, product), a);
+        assert_eq!(a.index(), i);
+        assert_eq!(Approach::from_index(i), Some(a));
+        // The settings key is the name without punctuation, words joined by `_`.
+        let key = name
+            .replace([',', '+'], "")
+            .replace(' ', "_")
+            .replace("audiovideo", "audio_video");
+        assert_eq!(a.settings_key(), key);
+        assert_eq!(Approach::from_settings_key(&key), Some(a));
+    }
+    assert_eq!(Approach::from_index(6), None);
+    assert_eq!(Approach::from_settings_key("audio"), None);
+}
+
+#[test]
+fn per_approach_values_are_keyed_by_approach() {
+    let names = PerApproach::from_fn(Approach::name);
+    let mut order = Vec::new();
+    let indices = PerApproach::from_fn(|a| {
+        order.push(a);
+        a.index()
+    });
+    assert_eq!(order, Approach::ALL.to_vec());
+    for (a, i) in indices.iter() {
+        assert_eq!(*i, a.index());
+        assert_eq!(*names.get(a), a.name());
+    }
+    let mut doubled = indices.map(|_, i| 2 * i);
+    *doubled.get_mut(Approach::VideoSum) = 7;
+    assert_eq!(doubled.audio_video_product, 10);
+    assert_eq!(doubled.video_sum, 7);
+    let failed: Result<PerApproach<usize>, Approach> =
+        PerApproach::try_from_fn(|a| if a.is_product() { Err(a) } else { Ok(0) });
+    assert_eq!(failed, Err(Approach::AudioProduct));
+    // The committed settings tables are keyed by the approaches' settings keys.
+    let p = committed();
+    assert!(
+        p.settings
+            .get(Approach::AudioVideoProduct)
+            .product_floor
+            .is_some()
+    );
+    assert!(
+        p.settings
+            .get(Approach::AudioVideoSum)
+            .product_floor
+            .is_none()
+    );
 }

@@ -14,7 +14,7 @@ use serde::Deserialize;
 use tracker_model::Vec2;
 
 use crate::scene::{
-    APPROACHES, Params, RunSpec, Score, Simulated, nominal, score_with, simulate_run,
+    Approach, Params, RunSpec, Score, Simulated, nominal, score_with, simulate_run,
 };
 use crate::{AvRun, Error, Result};
 
@@ -26,7 +26,7 @@ mod tests;
 
 pub use multi::tune_multi;
 pub use scores::{diagnose, fit_peak_scores, score_table};
-pub use single::{bearing_errors, stage1_choice, tune};
+pub use single::{BearingError, bearing_errors, stage1_choice, tune};
 
 /// Where a search's lines go, one at a time as they are measured: any `Fn(&str) + Sync`, such
 /// as a closure that prints them.
@@ -162,9 +162,30 @@ pub struct TuneScore {
     pub false_peaks: f64,
 }
 
-/// (vehicle-tick pairs, pairs with a peak within 2 m, peaks farther than 2 m from every
-/// vehicle, ticks) of a run (see [`TuneScore`]).
-fn peak_counts(sim: &Simulated, run: &AvRun) -> (usize, usize, usize, usize) {
+/// The peaks of one or more runs against the vehicles (see [`TuneScore`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct PeakCounts {
+    /// (Vehicle, tick) pairs.
+    pairs: usize,
+    /// Pairs with a peak within 2 m.
+    found: usize,
+    /// Peaks farther than 2 m from every vehicle.
+    false_peaks: usize,
+    /// Ticks.
+    ticks: usize,
+}
+
+impl std::ops::AddAssign for PeakCounts {
+    fn add_assign(&mut self, c: PeakCounts) {
+        self.pairs += c.pairs;
+        self.found += c.found;
+        self.false_peaks += c.false_peaks;
+        self.ticks += c.ticks;
+    }
+}
+
+/// The [`PeakCounts`] of a run.
+fn peak_counts(sim: &Simulated, run: &AvRun) -> PeakCounts {
     let (mut pairs, mut found, mut false_peaks) = (0, 0, 0);
     for scan in &run.scans {
         let truth = vehicles_at(sim, scan.tick);
@@ -179,7 +200,12 @@ fn peak_counts(sim: &Simulated, run: &AvRun) -> (usize, usize, usize, usize) {
             .filter(|q| truth.iter().all(|v| (q.position - v).norm() > 2.0))
             .count();
     }
-    (pairs, found, false_peaks, run.scans.len())
+    PeakCounts {
+        pairs,
+        found,
+        false_peaks,
+        ticks: run.scans.len(),
+    }
 }
 
 /// The true positions of the vehicles present at tick `tick`.
@@ -198,7 +224,7 @@ fn vehicles_at(sim: &Simulated, tick: u64) -> Vec<Vec2> {
 
 /// Approach `a`'s [`TuneScore`] with its single-vehicle settings on every run of `sims`
 /// ((multi-vehicle, run)).
-pub fn tune_score(p: &Params, sims: &[(bool, Simulated)], a: usize) -> Result<TuneScore> {
+pub fn tune_score(p: &Params, sims: &[(bool, Simulated)], a: Approach) -> Result<TuneScore> {
     let scores: Vec<(bool, Score)> = sims
         .par_iter()
         // The single-vehicle settings on every run (the search of `Params::tuning`).
@@ -220,39 +246,41 @@ pub fn tune_score(p: &Params, sims: &[(bool, Simulated)], a: usize) -> Result<Tu
         .map(|(_, s)| s.mota)
         .collect();
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
-    let (mut pairs, mut found, mut false_peaks, mut ticks) = (0, 0, 0, 0);
+    let mut counts = PeakCounts::default();
     for ((multi, sim), (_, s)) in sims.iter().zip(&scores) {
         if *multi {
-            let c = peak_counts(sim, &s.result);
-            pairs += c.0;
-            found += c.1;
-            false_peaks += c.2;
-            ticks += c.3;
+            counts += peak_counts(sim, &s.result);
         }
     }
     Ok(TuneScore {
         error_m: mean(&single),
         mota: mean(&scores.iter().map(|(_, s)| s.mota).collect::<Vec<_>>()),
         multi_mota: mean(&multi),
-        peak_recall: found as f64 / pairs.max(1) as f64,
-        false_peaks: false_peaks as f64 / ticks.max(1) as f64,
+        peak_recall: counts.found as f64 / counts.pairs.max(1) as f64,
+        false_peaks: counts.false_peaks as f64 / counts.ticks.max(1) as f64,
     })
 }
 
-/// The approaches named by a developer's list: `all`, or comma-separated indices into
-/// [`APPROACHES`].
-pub fn approaches_in(which: &str) -> Result<Vec<usize>> {
+/// The approaches named by a developer's list: `all`, or comma-separated items each an index
+/// into [`Approach::ALL`] or an approach's [`settings_key`](Approach::settings_key)
+/// (`5, audio_sum`), in the list's order.
+pub fn approaches_in(which: &str) -> Result<Vec<Approach>> {
     if which.trim() == "all" {
-        return Ok((0..APPROACHES.len()).collect());
+        return Ok(Approach::ALL.to_vec());
     }
     which
         .split(',')
-        .map(|s| match s.trim().parse::<usize>() {
-            Ok(a) if a < APPROACHES.len() => Ok(a),
-            _ => Err(Error::ApproachIndex {
+        .map(|s| {
+            let item = s.trim();
+            let found = match item.parse::<usize>() {
+                Ok(i) => Approach::from_index(i),
+                Err(_) => Approach::from_settings_key(item),
+            };
+            found.ok_or_else(|| Error::ApproachListItem {
                 given: s.to_string(),
-                n_approaches: APPROACHES.len(),
-            }),
+                n_approaches: Approach::ALL.len(),
+                known: Approach::ALL.map(Approach::settings_key).join(", "),
+            })
         })
         .collect()
 }

@@ -4,8 +4,7 @@ use rayon::prelude::*;
 
 use super::{Log, MultiTuning, Seeded, simulate_multi_all};
 use crate::scene::{
-    APPROACHES, ApproachSettings, Params, RunSpec, nominal, peak_scores_of, score_with,
-    settings_key,
+    Approach, ApproachSettings, Params, RunSpec, nominal, peak_scores_of, score_with,
 };
 use crate::{LobeEqualisation, Modalities, RangeFade, Result};
 
@@ -45,8 +44,8 @@ pub(super) fn fade_with(
     })
 }
 
-/// [`MultiTuning`]'s search for the approaches `which` (indices into [`APPROACHES`], in search
-/// order; see [`approaches_in`](super::approaches_in)) on the multi-vehicle runs of the seeds
+/// [`MultiTuning`]'s search for the approaches `which` (in search order; see
+/// [`approaches_in`](super::approaches_in)) on the multi-vehicle runs of the seeds
 /// of `seeded`: each line goes to `log` as it is measured, the choices last (as `key (MOTA m)
 /// = settings`). An approach with a peak-score table is searched from both starts, unscored
 /// and scored, and the better end point is kept.
@@ -54,12 +53,12 @@ pub fn tune_multi(
     p: &Params,
     runs: &[RunSpec],
     seeded: &Seeded,
-    which: &[usize],
+    which: &[Approach],
     log: &dyn Log,
 ) -> Result<()> {
     let t = &p.multi_tuning;
     let sims = simulate_multi_all(p, runs, seeded)?;
-    let objective = |a: usize, s: &ApproachSettings| -> Result<(f64, Vec<f64>)> {
+    let objective = |a: Approach, s: &ApproachSettings| -> Result<(f64, Vec<f64>)> {
         let motas: Vec<f64> = sims
             .par_iter()
             .map(|sim| Ok(score_with(p, sim, nominal(p), a, s, peak_scores_of(p, a, s)?)?.mota))
@@ -68,13 +67,13 @@ pub fn tune_multi(
     };
     let mut chosen = Vec::new();
     for &a in which {
-        let name = APPROACHES[a].0;
+        let name = a.name();
         let coords = multi_coordinates(p, a);
         // Scores change what every rate and threshold should be, so turning them on alone
         // from settings tuned without them rarely pays: an approach with a score table is
         // searched from both starts (unscored and scored), and the better end point is kept.
         let configured = *p.multi_settings.get(a);
-        let starts: Vec<ApproachSettings> = if p.multi_peak_scores.contains_key(&settings_key(a)) {
+        let starts: Vec<ApproachSettings> = if p.multi_peak_scores.contains_key(a.settings_key()) {
             [false, true]
                 .iter()
                 .map(|&scored| ApproachSettings {
@@ -93,10 +92,13 @@ pub fn tune_multi(
                 (best, best_score) = (end, score);
             }
         }
-        chosen.push((settings_key(a), best, best_score));
+        chosen.push(format!(
+            "{} (MOTA {best_score:.3}) = {best:?}",
+            a.settings_key()
+        ));
     }
-    for (k, s, m) in chosen {
-        log.say(&format!("{k} (MOTA {m:.3}) = {s:?}"));
+    for line in chosen {
+        log.say(&line);
     }
     Ok(())
 }
@@ -104,14 +106,13 @@ pub fn tune_multi(
 /// The coordinates of the multi-vehicle search of approach `a`, in search order: the
 /// explaining-away width, the profile shaping of the modalities it uses, then the peaks'
 /// threshold and suppression, MCMCDA's rates and limits, and the range fade.
-fn multi_coordinates(p: &Params, a: usize) -> Vec<Coordinate> {
+fn multi_coordinates(p: &Params, a: Approach) -> Vec<Coordinate> {
     let t = &p.multi_tuning;
     let mut coords: Vec<Coordinate> = vec![("explain away", t.explain_away_deg.clone(), |s, v| {
         s.explain_away_deg = v
     })];
-    coords.extend(profile_coordinates(t, APPROACHES[a].1));
-    let product = APPROACHES[a].2;
-    let product = &product;
+    coords.extend(profile_coordinates(t, a.modalities()));
+    let product = &a.is_product();
     coords.push((
         "kappa",
         if *product {
@@ -141,7 +142,7 @@ fn multi_coordinates(p: &Params, a: usize) -> Vec<Coordinate> {
     coords.push(("births", t.births_per_scan.clone(), |s, v| {
         s.births_per_scan = Some(v)
     }));
-    if p.multi_peak_scores.contains_key(&settings_key(a)) {
+    if p.multi_peak_scores.contains_key(a.settings_key()) {
         coords.push(("scored", vec![0.0, 1.0], |s, v| s.scored = v > 0.5));
     }
     coords.push(("max speed", t.max_speed.clone(), |s, v| {

@@ -4,13 +4,10 @@ use rayon::prelude::*;
 
 use super::{Log, ScoreFit, Seeded, peak_counts, simulate_multi, simulate_multi_all, vehicles_at};
 use crate::error::invalid;
-use crate::scene::{
-    APPROACHES, Params, RunSpec, Simulated, nominal, score, score_with, settings_key,
-};
+use crate::scene::{Approach, Params, RunSpec, Simulated, nominal, score, score_with};
 use crate::{PeakScores, Result};
 
-/// The score tables of [`Params::multi_peak_scores`] for the approaches `which` (indices into
-/// [`APPROACHES`]), learnt as [`ScoreFit`] says on the multi-vehicle runs of the seeds of
+/// The score tables of [`Params::multi_peak_scores`] for the approaches `which`, learnt as [`ScoreFit`] says on the multi-vehicle runs of the seeds of
 /// `seeded`, each printed to `log` as TOML with its counts. For each approach, with its
 /// multi-vehicle settings (but `max_peaks` peaks per tick, unscored), every peak is labelled
 /// by whether a vehicle is within `near_m` at its tick (the truth of calibration runs, as a
@@ -22,7 +19,7 @@ pub fn fit_peak_scores(
     p: &Params,
     runs: &[RunSpec],
     seeded: &Seeded,
-    which: &[usize],
+    which: &[Approach],
     log: &dyn Log,
 ) -> Result<()> {
     let f = &p.score_fit;
@@ -53,14 +50,13 @@ pub fn fit_peak_scores(
         let (table, counts) = score_table(&peaks, f.bins)?;
         let [far_n, near_n] = totals(&counts);
         log.say(&format!(
-            "scores {} ({near_n} near, {far_n} far peaks; per bin far/near {counts:?}):",
-            APPROACHES[a].0
+            "scores {a} ({near_n} near, {far_n} far peaks; per bin far/near {counts:?}):"
         ));
         // Shortest round-trip form: the pasted table is the fitted one to the bit.
         let fmt = |v: &[f64]| v.iter().map(f64::to_string).collect::<Vec<_>>().join(", ");
         log.say(&format!(
             "{} = {{ contrast_edges = [{}], log_ratios = [{}] }}",
-            settings_key(a),
+            a.settings_key(),
             fmt(&table.contrast_edges),
             fmt(&table.log_ratios)
         ));
@@ -139,7 +135,7 @@ pub fn diagnose(p: &Params, runs: &[RunSpec], seeded: &Seeded, log: &dyn Log) ->
     for (seed, base) in seeded {
         let sims = simulate_multi(p, runs, base)?;
         for (r, sim) in sims.iter().enumerate() {
-            for a in 0..APPROACHES.len() {
+            for a in Approach::ALL {
                 log.say(&format!("seed {seed} run {r} {}", diagnosis(p, sim, a)?));
             }
         }
@@ -148,7 +144,7 @@ pub fn diagnose(p: &Params, runs: &[RunSpec], seeded: &Seeded, log: &dyn Log) ->
 }
 
 /// Approach `a` on one multi-vehicle run: its line of [`diagnose`] after the seed and run.
-fn diagnosis(p: &Params, sim: &Simulated, a: usize) -> Result<String> {
+fn diagnosis(p: &Params, sim: &Simulated, a: Approach) -> Result<String> {
     let s = score(p, sim, nominal(p), a)?;
     let c = &s.clear;
     let mut per_vehicle = Vec::new();
@@ -167,10 +163,9 @@ fn diagnosis(p: &Params, sim: &Simulated, a: usize) -> Result<String> {
         }
         per_vehicle.push(format!("{near}/{n}"));
     }
-    let (_, _, false_peaks, ticks) = peak_counts(sim, &s.result);
+    let counts = peak_counts(sim, &s.result);
     Ok(format!(
-        "{}: MOTA {:.3} OSPA {:.2} | TP {} FN {} FP {} IDSW {} frag {} | tracks {} | peaks near vehicle {} | false peaks {}/{} ticks",
-        APPROACHES[a].0,
+        "{a}: MOTA {:.3} OSPA {:.2} | TP {} FN {} FP {} IDSW {} frag {} | tracks {} | peaks near vehicle {} | false peaks {}/{} ticks",
         c.mota,
         s.ospa,
         c.true_positives,
@@ -180,7 +175,7 @@ fn diagnosis(p: &Params, sim: &Simulated, a: usize) -> Result<String> {
         c.fragmentations,
         s.result.tracks.len(),
         per_vehicle.join(" "),
-        false_peaks,
-        ticks
+        counts.false_peaks,
+        counts.ticks
     ))
 }

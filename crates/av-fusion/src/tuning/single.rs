@@ -7,21 +7,30 @@ use rayon::prelude::*;
 
 use super::{Log, Seeded, TuneScore, tune_score};
 use crate::scene::{
-    APPROACHES, ApproachSettings, Calibration, Params, RunSpec, Simulated, nominal, sensor_nodes,
-    settings_key, simulate_run,
+    Approach, ApproachSettings, Calibration, Params, RunSpec, Simulated, nominal, sensor_nodes,
+    simulate_run,
 };
 use crate::{Error, Modalities, Result};
+
+/// One sensor's bearing error over a set of reports ([`bearing_errors`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BearingError {
+    /// Mean, degrees.
+    pub mean_deg: f64,
+    /// Standard deviation, degrees.
+    pub sd_deg: f64,
+}
 
 /// Each sensor's bearing error on the single-vehicle passes: the bearing of its profile's
 /// maximum from the believed pose at heading error `calib` against the true bearing of the
 /// vehicle at the report's time, over the reports where the vehicle is inside the region.
-/// Returns (mean, standard deviation) in degrees per sensor, in sensor order.
+/// Returns one [`BearingError`] per sensor, in sensor order.
 pub fn bearing_errors(
     p: &Params,
     sims: &[&Simulated],
     calib: Calibration,
-) -> Result<Vec<(f64, f64)>> {
-    let nodes = sensor_nodes(p, calib, p.settings.get(5))?;
+) -> Result<Vec<BearingError>> {
+    let nodes = sensor_nodes(p, calib, p.settings.get(Approach::AudioVideoProduct))?;
     let mut acc = vec![Vec::new(); nodes.len()];
     for sim in sims {
         let Some(gt) = sim.gt.tracks().first() else {
@@ -65,7 +74,10 @@ pub fn bearing_errors(
             let n = e.len().max(1) as f64;
             let m = e.iter().sum::<f64>() / n;
             let v = e.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / n;
-            (m, v.sqrt())
+            BearingError {
+                mean_deg: m,
+                sd_deg: v.sqrt(),
+            }
         })
         .collect())
 }
@@ -122,7 +134,7 @@ pub fn tune(p: &Params, runs: &[RunSpec], seeded: &Seeded, log: &dyn Log) -> Res
         let stats = bearing_errors(p, &singles, calib)?;
         let text: Vec<String> = stats
             .iter()
-            .map(|(m, s)| format!("{m:+.1}° ± {s:.1}°"))
+            .map(|e| format!("{:+.1}° ± {:.1}°", e.mean_deg, e.sd_deg))
             .collect();
         bearing_lines.push(format!(
             "bearing error of the profile maximum at {calib:?}: {}",
@@ -139,7 +151,8 @@ pub fn tune(p: &Params, runs: &[RunSpec], seeded: &Seeded, log: &dyn Log) -> Res
     for line in bearing_lines {
         search.say(&line);
     }
-    for (a, (name, _, _)) in APPROACHES.iter().enumerate() {
+    for a in Approach::ALL {
+        let name = a.name();
         let s = tune_score(&search.q, &search.sims, a)?;
         search.line(&format!("{name}: as configured"), &s);
         // The stages are repeated until a round changes nothing (a fixed point) or for
@@ -157,7 +170,7 @@ pub fn tune(p: &Params, runs: &[RunSpec], seeded: &Seeded, log: &dyn Log) -> Res
         }
     }
     // The choice as TOML, to paste into the configuration.
-    for a in 0..APPROACHES.len() {
+    for a in Approach::ALL {
         search.say(&settings_toml(a, search.q.settings.get(a)));
     }
     Ok(search.out)
@@ -208,7 +221,7 @@ impl Search<'_> {
     }
 
     /// The score of approach `a` with settings `w`.
-    fn score(&self, a: usize, w: ApproachSettings) -> Result<TuneScore> {
+    fn score(&self, a: Approach, w: ApproachSettings) -> Result<TuneScore> {
         let mut c = self.q.clone();
         *c.settings.get_mut(a) = w;
         tune_score(&c, &self.sims, a)
@@ -216,9 +229,9 @@ impl Search<'_> {
 
     /// Stage 1: the grid of the fusion parameters this approach uses (a single value
     /// elsewhere), chosen by [`stage1_choice`].
-    fn stage1(&mut self, a: usize) -> Result<()> {
+    fn stage1(&mut self, a: Approach) -> Result<()> {
         let t = &self.q.tuning.clone();
-        let (name, modalities, product) = APPROACHES[a];
+        let (name, modalities, product) = (a.name(), a.modalities(), a.is_product());
         let uses_audio = modalities != Modalities::Video;
         let uses_video = modalities != Modalities::Audio;
         let configured = *self.q.settings.get(a);
@@ -276,9 +289,9 @@ impl Search<'_> {
     }
 
     /// Stage 2a: the NMS radius, p_d and clutter rate by the approach's mean MOTA.
-    fn stage2a(&mut self, a: usize) -> Result<()> {
+    fn stage2a(&mut self, a: Approach) -> Result<()> {
         let t = &self.q.tuning.clone();
-        let name = APPROACHES[a].0;
+        let name = a.name();
         let mut best: Option<(ApproachSettings, TuneScore)> = None;
         for &nms in &t.suppression_radius_m {
             for &pd in &t.p_detect {
@@ -309,9 +322,9 @@ impl Search<'_> {
     }
 
     /// Stage 2b: the peaks' κ by the same MOTA; returns the round's choice.
-    fn stage2b(&mut self, a: usize) -> Result<(ApproachSettings, TuneScore)> {
-        let (name, _, product) = APPROACHES[a];
-        let kappas = if product {
+    fn stage2b(&mut self, a: Approach) -> Result<(ApproachSettings, TuneScore)> {
+        let name = a.name();
+        let kappas = if a.is_product() {
             self.q.tuning.relative_threshold_product.clone()
         } else {
             self.q.tuning.relative_threshold_sum.clone()
@@ -338,8 +351,8 @@ impl Search<'_> {
 
 /// Approach `a`'s settings `w` as a line of TOML for the configuration (only the keys the
 /// approach uses).
-fn settings_toml(a: usize, w: &ApproachSettings) -> String {
-    let (_, modalities, _) = APPROACHES[a];
+fn settings_toml(a: Approach, w: &ApproachSettings) -> String {
+    let modalities = a.modalities();
     let mut fields = Vec::new();
     if modalities == Modalities::Both {
         fields.push(format!("audio_weight = {:?}", w.audio_weight));
@@ -361,5 +374,5 @@ fn settings_toml(a: usize, w: &ApproachSettings) -> String {
     ));
     fields.push(format!("p_detect = {:?}", w.p_detect));
     fields.push(format!("clutter_per_scan = {:?}", w.clutter_per_scan));
-    format!("{} = {{ {} }}", settings_key(a), fields.join(", "))
+    format!("{} = {{ {} }}", a.settings_key(), fields.join(", "))
 }

@@ -44,13 +44,19 @@ fn fade_coordinates_turn_on_change_and_turn_off() {
 }
 
 #[test]
-fn approaches_are_all_or_valid_indices() {
+fn approaches_are_all_or_valid_indices_or_keys() {
+    assert_eq!(approaches_in("all").expect("all"), Approach::ALL.to_vec());
     assert_eq!(
-        approaches_in("all").expect("all"),
-        (0..6).collect::<Vec<_>>()
+        approaches_in("5, 2").expect("list"),
+        vec![Approach::AudioVideoProduct, Approach::AudioVideoSum]
     );
-    assert_eq!(approaches_in("5, 2").expect("list"), vec![5, 2]);
+    assert_eq!(
+        approaches_in("video_product,0").expect("list"),
+        vec![Approach::VideoProduct, Approach::AudioSum]
+    );
     assert!(approaches_in("6").is_err());
     assert!(approaches_in("1,x").is_err());
     assert!(approaches_in("").is_err());
+    let err = approaches_in("audio").expect_err("not a key").to_string();
+    assert!(err.contains("audio_video_product"), "{err}");
 }

@@ -15,14 +15,15 @@ use crate::Developer;
 /// (`av_fusion::tuning::tune`), each line as it is measured and then the whole table.
 const TUNE_ENV: &str = "AV_FUSION_TUNE";
 
-/// `AV_FUSION_FIT_SCORES=<approaches>` (`all`, or approach indices): learns the peak-score
+/// `AV_FUSION_FIT_SCORES=<approaches>` (`all`, or comma-separated approach indices or keys
+/// such as `5,audio_product`; `av_fusion::tuning::approaches_in`): learns the peak-score
 /// tables of `[params.multi_peak_scores]` with `[params.score_fit]` and prints them as TOML.
 /// The tables are fitted with the multi-vehicle settings as configured, and the search of
 /// `AV_FUSION_TUNE_MULTI` uses the tables as configured (not those just printed): fit, paste,
 /// search, paste, and fit again until neither moves.
 const FIT_SCORES_ENV: &str = "AV_FUSION_FIT_SCORES";
 
-/// `AV_FUSION_TUNE_MULTI=<approaches>` (`all`, or approach indices): the coordinate search of
+/// `AV_FUSION_TUNE_MULTI=<approaches>` (as for `AV_FUSION_FIT_SCORES`): the coordinate search of
 /// `[params.multi_tuning]` behind `[params.multi_settings]`.
 const TUNE_MULTI_ENV: &str = "AV_FUSION_TUNE_MULTI";
 

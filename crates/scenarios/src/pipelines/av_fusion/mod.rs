@@ -15,8 +15,8 @@
 
 use anyhow::Result;
 use av_fusion::scene::{
-    APPROACHES, Calibration, MPS_PER_MPH, Params, REGION_M, RunSpec, check_params, nominal,
-    run_specs, score, score_with, sensor_nodes, simulate_run,
+    Approach, Calibration, MPS_PER_MPH, Params, PerApproach, REGION_M, RunSpec, Simulated,
+    check_params, nominal, run_specs, score, score_with, sensor_nodes, simulate_run,
 };
 use av_fusion::{Modalities, SensorKind};
 use rand_chacha::ChaCha8Rng;
@@ -34,42 +34,108 @@ use crate::{
 /// The `av-fusion` pipeline.
 pub struct AvFusion;
 
+/// One approach on one run.
+struct RunScore {
+    /// Mean error of each vehicle's paired track (None: no track formed).
+    errors: Vec<Option<f64>>,
+    /// MOTA.
+    mota: f64,
+    /// Mean OSPA, m.
+    ospa: f64,
+    /// Multi-vehicle runs: MOTA with the single-vehicle settings (audio+video only; `None`
+    /// elsewhere and for single-vehicle runs).
+    mota_single_settings: Option<f64>,
+}
+
 /// One run's results.
 struct RunResult {
-    /// Per approach: mean error of each vehicle's paired track (None: no track formed).
-    errors: Vec<Vec<Option<f64>>>,
-    /// Per approach: MOTA and mean OSPA.
-    mota: Vec<f64>,
-    ospa: Vec<f64>,
-    /// Multi-vehicle runs, per approach: MOTA with the single-vehicle settings (audio+video
-    /// only; `None` elsewhere and for single-vehicle runs).
-    mota_single_settings: Vec<Option<f64>>,
-    /// Per calibration sweep value, per approach: mean error over vehicles (None: no track).
-    sweep: Vec<Vec<Option<f64>>>,
+    /// Each approach's scores.
+    scores: PerApproach<RunScore>,
+    /// Per calibration sweep value: each approach's mean error over vehicles (None: no track,
+    /// or an approach the sweep does not run).
+    sweep: Vec<PerApproach<Option<f64>>>,
     /// For the map: max over ticks of the A+V product grid (per tick scaled to max 1), the
     /// tracks and the truth.
     map: Option<MapData>,
 }
 
+/// One grid cell of the map.
+struct MapCell {
+    /// Centre, m.
+    x: f64,
+    /// Centre, m.
+    y: f64,
+    /// Fused likelihood, each tick scaled to max 1, max over the ticks.
+    likelihood: f64,
+}
+
+/// One sensor of the map.
+struct MapSensor {
+    /// Position, m.
+    x: f64,
+    /// Position, m.
+    y: f64,
+    /// Acoustic node or camera.
+    kind: SensorKind,
+}
+
+/// The map of the last run: the fused likelihood, the tracks, the truth and the sensors.
 struct MapData {
-    cells: Vec<(f64, f64, f64)>,
+    cells: Vec<MapCell>,
     tracks: Vec<Vec<(f64, f64)>>,
     truth: Vec<Vec<(f64, f64)>>,
-    sensors: Vec<(f64, f64, SensorKind)>,
+    sensors: Vec<MapSensor>,
+}
+
+/// One single-vehicle pass.
+struct Pass {
+    /// Seconds across the region.
+    duration_s: f64,
+    /// Speed, mph.
+    speed_mph: f64,
+}
+
+/// The calibration sweep at one heading error.
+struct SweepPoint {
+    /// The heading error δ of every node, degrees.
+    heading_error_deg: f64,
+    /// Per approach, per pass: the mean error over the pass's vehicles (None: no track, or
+    /// an approach the sweep does not run).
+    errors: PerApproach<Vec<Option<f64>>>,
+}
+
+/// One approach on one multi-vehicle run.
+struct MultiScore {
+    /// MOTA.
+    mota: f64,
+    /// Mean OSPA, m.
+    ospa: f64,
+    /// Audio+video's MOTA with its single-vehicle settings (`None` for the others).
+    mota_single_settings: Option<f64>,
+}
+
+/// One multi-vehicle run.
+struct MultiRun {
+    /// Vehicles in the run.
+    vehicles: usize,
+    /// Each approach's scores.
+    scores: PerApproach<MultiScore>,
+}
+
+/// A mean and the half-width of its 95 % confidence interval.
+#[derive(Clone, Copy)]
+struct MeanCi {
+    mean: f64,
+    ci95: f64,
 }
 
 /// What the pipeline computed.
 pub struct Output {
-    passes: Vec<(f64, f64)>,
-    /// errors[approach][pass].
-    errors: Vec<Vec<Option<f64>>>,
-    sweep_deg: Vec<f64>,
-    /// sweep[value][approach][pass].
-    sweep: Vec<Vec<Vec<Option<f64>>>>,
-    /// Multi-vehicle runs: (vehicles, MOTA per approach, OSPA per approach).
-    multi: Vec<(usize, Vec<f64>, Vec<f64>)>,
-    /// Multi-vehicle runs, per approach: audio+video's MOTA with its single-vehicle settings.
-    multi_single_settings: Vec<Vec<Option<f64>>>,
+    passes: Vec<Pass>,
+    /// Per approach, per pass: the error of the pass's track.
+    errors: PerApproach<Vec<Option<f64>>>,
+    sweep: Vec<SweepPoint>,
+    multi: Vec<MultiRun>,
     map: Option<MapData>,
     calibration_error_deg: f64,
     audio_calibration_error_deg: f64,
@@ -77,56 +143,57 @@ pub struct Output {
 
 fn run_one(p: &Params, run: &RunSpec, rng: &mut ChaCha8Rng, want_map: bool) -> Result<RunResult> {
     let sim = simulate_run(p, run, rng)?;
-    let mut errors = Vec::new();
-    let mut mota = Vec::new();
-    let mut ospa = Vec::new();
     let mut map = None;
-    let mut mota_single_settings = Vec::new();
-    for (a, (_, modalities, _)) in APPROACHES.iter().enumerate() {
+    let scores = PerApproach::try_from_fn(|a| -> Result<RunScore> {
         let s = score(p, &sim, nominal(p), a)?;
-        errors.push(s.errors);
-        mota.push(s.mota);
-        ospa.push(s.ospa);
         // What the multi-vehicle settings bring: audio+video with its single-vehicle ones.
-        mota_single_settings.push(if sim.multi && *modalities == Modalities::Both {
+        let mota_single_settings = if sim.multi && a.modalities() == Modalities::Both {
             Some(score_with(p, &sim, nominal(p), a, p.settings.get(a), None)?.mota)
         } else {
             None
-        });
-        if want_map && a == APPROACHES.len() - 1 {
+        };
+        if want_map && a == Approach::AudioVideoProduct {
             map = Some(map_data(p, &s.result, &sim.gt)?);
         }
-    }
-    let mut sweep = Vec::new();
-    for &deg in &p.calibration_sweep_deg {
-        let calib = Calibration {
-            audio_deg: deg,
-            video_deg: deg,
-        };
-        let mut row = Vec::new();
-        for (a, (_, _, product)) in APPROACHES.iter().enumerate() {
-            // The sweep runs the product rule only, on the single-vehicle passes (time budget;
-            // the report averages it over the passes); the nominal setting is done.
-            if !*product || sim.multi {
-                row.push(None);
-                continue;
-            }
-            let e = if calib == nominal(p) {
-                errors[a].clone()
-            } else {
-                score(p, &sim, calib, a)?.errors
-            };
-            row.push(average(&e));
+        Ok(RunScore {
+            errors: s.errors,
+            mota: s.mota,
+            ospa: s.ospa,
+            mota_single_settings,
+        })
+    })?;
+    let sweep = p
+        .calibration_sweep_deg
+        .iter()
+        .map(|&deg| sweep_errors(p, &sim, &scores, deg))
+        .collect::<Result<_>>()?;
+    Ok(RunResult { scores, sweep, map })
+}
+
+/// One run's mean error per approach with every node at heading error ±`deg` (`nominal`: the
+/// errors already in `scores`).
+fn sweep_errors(
+    p: &Params,
+    sim: &Simulated,
+    scores: &PerApproach<RunScore>,
+    deg: f64,
+) -> Result<PerApproach<Option<f64>>> {
+    let calib = Calibration {
+        audio_deg: deg,
+        video_deg: deg,
+    };
+    PerApproach::try_from_fn(|a| {
+        // The sweep runs the product rule only, on the single-vehicle passes (time budget;
+        // the report averages it over the passes); the nominal setting is done.
+        if !a.is_product() || sim.multi {
+            return Ok(None);
         }
-        sweep.push(row);
-    }
-    Ok(RunResult {
-        errors,
-        mota,
-        ospa,
-        mota_single_settings,
-        sweep,
-        map,
+        let e = if calib == nominal(p) {
+            scores.get(a).errors.clone()
+        } else {
+            score(p, sim, calib, a)?.errors
+        };
+        Ok(average(&e))
     })
 }
 
@@ -150,7 +217,11 @@ fn map_data(p: &Params, run: &av_fusion::AvRun, gt: &TrackSet) -> Result<MapData
         let (cols, _) = g.shape();
         for (i, v) in a.iter().enumerate() {
             let c = g.cell_centre(i % cols, i / cols);
-            cells.push((c.x, c.y, *v));
+            cells.push(MapCell {
+                x: c.x,
+                y: c.y,
+                likelihood: *v,
+            });
         }
     }
     let path = |t: &Track| {
@@ -169,10 +240,14 @@ fn map_data(p: &Params, run: &av_fusion::AvRun, gt: &TrackSet) -> Result<MapData
                 audio_deg: 0.0,
                 video_deg: 0.0,
             },
-            p.settings.get(5),
+            p.settings.get(Approach::AudioVideoProduct),
         )?
         .iter()
-        .map(|n| (n.pose.position.x, n.pose.position.y, n.kind))
+        .map(|n| MapSensor {
+            x: n.pose.position.x,
+            y: n.pose.position.y,
+            kind: n.kind,
+        })
         .collect(),
     })
 }
@@ -188,7 +263,7 @@ impl Pipeline for AvFusion {
         env.progress.set_length(runs.len() as u64);
         let base = rng.clone();
         let n_passes = p.passes.len();
-        let results: Vec<RunResult> = runs
+        let mut results: Vec<RunResult> = runs
             .par_iter()
             .enumerate()
             .map(|(i, run)| {
@@ -199,37 +274,45 @@ impl Pipeline for AvFusion {
                 r
             })
             .collect::<Result<_>>()?;
-        let errors = (0..APPROACHES.len())
-            .map(|a| results[..n_passes].iter().map(|r| r.errors[a][0]).collect())
-            .collect();
-        let sweep = (0..p.calibration_sweep_deg.len())
-            .map(|s| {
-                (0..APPROACHES.len())
-                    .map(|a| results[..n_passes].iter().map(|r| r.sweep[s][a]).collect())
-                    .collect()
+        let map = results.iter_mut().rev().find_map(|r| r.map.take());
+        let (singles, multis) = results.split_at(n_passes);
+        let errors =
+            PerApproach::from_fn(|a| singles.iter().map(|r| r.scores.get(a).errors[0]).collect());
+        let sweep = p
+            .calibration_sweep_deg
+            .iter()
+            .enumerate()
+            .map(|(s, &deg)| SweepPoint {
+                heading_error_deg: deg,
+                errors: PerApproach::from_fn(|a| {
+                    singles.iter().map(|r| *r.sweep[s].get(a)).collect()
+                }),
             })
             .collect();
-        let multi = results[n_passes..]
+        let multi = multis
             .iter()
             .zip(&p.multi)
-            .map(|(r, spec)| (spec.len(), r.mota.clone(), r.ospa.clone()))
+            .map(|(r, spec)| MultiRun {
+                vehicles: spec.len(),
+                scores: r.scores.map(|_, s| MultiScore {
+                    mota: s.mota,
+                    ospa: s.ospa,
+                    mota_single_settings: s.mota_single_settings,
+                }),
+            })
             .collect();
-        let multi_single_settings = results[n_passes..]
-            .iter()
-            .map(|r| r.mota_single_settings.clone())
-            .collect();
-        let map = results.into_iter().rev().find_map(|r| r.map);
         Ok(Output {
             passes: p
                 .passes
                 .iter()
-                .map(|s| (s.duration_s, REGION_M[0] / s.duration_s / MPS_PER_MPH))
+                .map(|s| Pass {
+                    duration_s: s.duration_s,
+                    speed_mph: REGION_M[0] / s.duration_s / MPS_PER_MPH,
+                })
                 .collect(),
             errors,
-            sweep_deg: p.calibration_sweep_deg.clone(),
             sweep,
             multi,
-            multi_single_settings,
             map,
             calibration_error_deg: p.calibration_error_deg,
             audio_calibration_error_deg: p.audio_calibration_error_deg,
@@ -238,9 +321,9 @@ impl Pipeline for AvFusion {
 
     fn metrics(out: &Output) -> Metrics {
         let mut m = Metrics::new();
-        for (a, (name, _, _)) in APPROACHES.iter().enumerate() {
-            let key = key(name);
-            let found: Vec<f64> = out.errors[a].iter().flatten().copied().collect();
+        for a in Approach::ALL {
+            let key = metric_key(a);
+            let found: Vec<f64> = out.errors.get(a).iter().flatten().copied().collect();
             let (mean, ci) = mean_ci(&found);
             if mean.is_finite() {
                 m.insert(format!("error_m_{key}_mean"), mean);
@@ -248,22 +331,24 @@ impl Pipeline for AvFusion {
             }
             m.insert(format!("passes_tracked_{key}"), found.len() as f64);
             if let Some(gain) = fusion_gain(out, a, Modalities::Audio) {
-                m.insert(format!("fusion_gain_m_{key}_mean"), gain.0);
-                m.insert(format!("fusion_gain_m_{key}_ci95"), gain.1);
+                m.insert(format!("fusion_gain_m_{key}_mean"), gain.mean);
+                m.insert(format!("fusion_gain_m_{key}_ci95"), gain.ci95);
             }
             if let Some(gain) = fusion_gain(out, a, Modalities::Video) {
-                m.insert(format!("fusion_gain_over_video_m_{key}_mean"), gain.0);
-                m.insert(format!("fusion_gain_over_video_m_{key}_ci95"), gain.1);
+                m.insert(format!("fusion_gain_over_video_m_{key}_mean"), gain.mean);
+                m.insert(format!("fusion_gain_over_video_m_{key}_ci95"), gain.ci95);
             }
-            for (s, deg) in out.sweep_deg.iter().enumerate() {
-                if let Some(e) = average(&out.sweep[s][a]) {
+            for point in &out.sweep {
+                if let Some(e) = average(point.errors.get(a)) {
+                    let deg = point.heading_error_deg;
                     m.insert(format!("calibration_{deg}deg_error_m_{key}"), e);
                 }
             }
-            for (r, (n, mota, ospa)) in out.multi.iter().enumerate() {
-                m.insert(format!("multi{r}_{n}veh_mota_{key}"), mota[a]);
-                m.insert(format!("multi{r}_{n}veh_ospa_m_{key}"), ospa[a]);
-                if let Some(x) = out.multi_single_settings[r][a] {
+            for (r, run) in out.multi.iter().enumerate() {
+                let (n, s) = (run.vehicles, run.scores.get(a));
+                m.insert(format!("multi{r}_{n}veh_mota_{key}"), s.mota);
+                m.insert(format!("multi{r}_{n}veh_ospa_m_{key}"), s.ospa);
+                if let Some(x) = s.mota_single_settings {
                     m.insert(
                         format!("multi{r}_{n}veh_mota_{key}_single_vehicle_settings"),
                         x,
@@ -275,70 +360,15 @@ impl Pipeline for AvFusion {
     }
 
     fn claims(out: &Output) -> Vec<Claim> {
-        let avg = |a: usize| average(&out.errors[a]).unwrap_or(f64::INFINITY);
-        let mut claims = vec![
-            // The averages below skip passes without a track; this keeps them comparable.
-            Claim::new(
-                "every approach forms a track on every single-vehicle pass",
-                out.errors
-                    .iter()
-                    .all(|per_pass| per_pass.iter().all(Option::is_some)),
-            ),
-            Claim::new(
-                "audio+video's average error over the passes is at most 2 m (the paper's ≈ 2 m) under both rules",
-                avg(2) <= 2.0 && avg(5) <= 2.0,
-            ),
-            Claim::new(
-                "audio+video is better than video alone under both rules: the paired per-pass \
-                 gain over video (video − audio+video) has its 95 % CI above 0",
-                significant(fusion_gain(out, 2, Modalities::Video))
-                    && significant(fusion_gain(out, 5, Modalities::Video)),
-            ),
-            Claim::new(
-                "under the product rule audio+video is better than each single modality: the \
-                 paired per-pass gains over audio and over video have their 95 % CIs above 0 \
-                 (the issue's target; each approach with its own settings tuned on seeds 1–3)",
-                significant(fusion_gain(out, 5, Modalities::Audio))
-                    && significant(fusion_gain(out, 5, Modalities::Video)),
-            ),
-            Claim::new(
-                "under the product rule audio+video reaches the issue's MOTA 0.8 on every \
-                 multi-vehicle run of this seed (this seed only: other seeds have runs below \
-                 0.8, see docs/av-fusion.md)",
-                !out.multi.is_empty() && out.multi.iter().all(|(_, mota, _)| mota[5] >= 0.8),
-            ),
-            Claim::new(
-                "under the weighted sum audio+video does not reach MOTA 0.8 on every \
-                 multi-vehicle run",
-                out.multi.iter().any(|(_, mota, _)| mota[2] < 0.8),
-            ),
-        ];
-        if let (Some(first), Some(last)) = (out.sweep.first(), out.sweep.last())
-            && out.sweep.len() >= 2
-        {
-            claims.push(Claim::new(
-                format!(
-                    "video-only (product) error grows with camera calibration error: higher at {}° than at {}°",
-                    fmt_num(out.sweep_deg[out.sweep_deg.len() - 1]),
-                    fmt_num(out.sweep_deg[0])
-                ),
-                average(&last[4]).unwrap_or(f64::INFINITY) > average(&first[4]).unwrap_or(0.0),
-            ));
-            claims.push(Claim::new(
-                format!(
-                    "audio-only (product) error grows with the acoustic nodes' heading error: higher at {}° than at {}°",
-                    fmt_num(out.sweep_deg[out.sweep_deg.len() - 1]),
-                    fmt_num(out.sweep_deg[0])
-                ),
-                average(&last[3]).unwrap_or(f64::INFINITY) > average(&first[3]).unwrap_or(0.0),
-            ));
-        }
+        let mut claims = single_vehicle_claims(out);
+        claims.extend(multi_vehicle_claims(out));
+        claims.extend(sweep_claims(out));
         claims
     }
 
     fn headlines(out: &Output) -> Vec<Headline> {
-        let fmt = |a: usize| {
-            let found: Vec<f64> = out.errors[a].iter().flatten().copied().collect();
+        let fmt = |a: Approach| {
+            let found: Vec<f64> = out.errors.get(a).iter().flatten().copied().collect();
             let (m, c) = mean_ci(&found);
             format!("{} ± {} m", fmt_num(m), fmt_num(c))
         };
@@ -348,7 +378,11 @@ impl Pipeline for AvFusion {
                 out.passes.len()
             ),
             paper: Some("≈ 2 m (Kushwaha et al. 2008, Figs. 10–11)".into()),
-            ours: format!("{} (product), {} (weighted sum)", fmt(5), fmt(2)),
+            ours: format!(
+                "{} (product), {} (weighted sum)",
+                fmt(Approach::AudioVideoProduct),
+                fmt(Approach::AudioVideoSum)
+            ),
             peer: None,
         }]
     }
@@ -367,35 +401,119 @@ impl Pipeline for AvFusion {
     }
 }
 
+/// The claims on the single-vehicle passes at the nominal heading errors.
+fn single_vehicle_claims(out: &Output) -> Vec<Claim> {
+    let avg = |a: Approach| average(out.errors.get(a)).unwrap_or(f64::INFINITY);
+    let gain_over = |over: Modalities, a: Approach| significant(fusion_gain(out, a, over));
+    vec![
+        // The averages below skip passes without a track; this keeps them comparable.
+        Claim::new(
+            "every approach forms a track on every single-vehicle pass",
+            out.errors
+                .iter()
+                .all(|(_, per_pass)| per_pass.iter().all(Option::is_some)),
+        ),
+        Claim::new(
+            "audio+video's average error over the passes is at most 2 m (the paper's ≈ 2 m) under both rules",
+            avg(Approach::AudioVideoSum) <= 2.0 && avg(Approach::AudioVideoProduct) <= 2.0,
+        ),
+        Claim::new(
+            "audio+video is better than video alone under both rules: the paired per-pass \
+             gain over video (video − audio+video) has its 95 % CI above 0",
+            gain_over(Modalities::Video, Approach::AudioVideoSum)
+                && gain_over(Modalities::Video, Approach::AudioVideoProduct),
+        ),
+        Claim::new(
+            "under the product rule audio+video is better than each single modality: the \
+             paired per-pass gains over audio and over video have their 95 % CIs above 0 \
+             (the issue's target; each approach with its own settings tuned on seeds 1–3)",
+            gain_over(Modalities::Audio, Approach::AudioVideoProduct)
+                && gain_over(Modalities::Video, Approach::AudioVideoProduct),
+        ),
+    ]
+}
+
+/// The claims on the multi-vehicle runs.
+fn multi_vehicle_claims(out: &Output) -> Vec<Claim> {
+    let mota = |run: &MultiRun, a: Approach| run.scores.get(a).mota;
+    vec![
+        Claim::new(
+            "under the product rule audio+video reaches the issue's MOTA 0.8 on every \
+             multi-vehicle run of this seed (this seed only: other seeds have runs below \
+             0.8, see docs/av-fusion.md)",
+            !out.multi.is_empty()
+                && out
+                    .multi
+                    .iter()
+                    .all(|run| mota(run, Approach::AudioVideoProduct) >= 0.8),
+        ),
+        Claim::new(
+            "under the weighted sum audio+video does not reach MOTA 0.8 on every \
+             multi-vehicle run",
+            out.multi
+                .iter()
+                .any(|run| mota(run, Approach::AudioVideoSum) < 0.8),
+        ),
+    ]
+}
+
+/// The claims on the calibration sweep (none with fewer than two heading errors).
+fn sweep_claims(out: &Output) -> Vec<Claim> {
+    let (Some(first), Some(last)) = (out.sweep.first(), out.sweep.last()) else {
+        return Vec::new();
+    };
+    if out.sweep.len() < 2 {
+        return Vec::new();
+    }
+    let grows = |a: Approach| {
+        average(last.errors.get(a)).unwrap_or(f64::INFINITY)
+            > average(first.errors.get(a)).unwrap_or(0.0)
+    };
+    vec![
+        Claim::new(
+            format!(
+                "video-only (product) error grows with camera calibration error: higher at {}° than at {}°",
+                fmt_num(last.heading_error_deg),
+                fmt_num(first.heading_error_deg)
+            ),
+            grows(Approach::VideoProduct),
+        ),
+        Claim::new(
+            format!(
+                "audio-only (product) error grows with the acoustic nodes' heading error: higher at {}° than at {}°",
+                fmt_num(last.heading_error_deg),
+                fmt_num(first.heading_error_deg)
+            ),
+            grows(Approach::AudioProduct),
+        ),
+    ]
+}
+
 /// Each pass's error per approach, their means, and fusion's paired gains.
 fn per_pass_table(out: &Output) -> Table {
+    let mut header = vec!["pass", "duration (s)", "speed (mph)"];
+    header.extend(Approach::ALL.map(Approach::name));
     let mut per_pass = Table::new(
         &format!(
             "Mean tracking error (m) per pass and approach, heading error ±{}° (cameras) and ±{}° (acoustic nodes); — = no track formed",
             fmt_num(out.calibration_error_deg),
             fmt_num(out.audio_calibration_error_deg)
         ),
-        &[
-            "pass",
-            "duration (s)",
-            "speed (mph)",
-            APPROACHES[0].0,
-            APPROACHES[1].0,
-            APPROACHES[2].0,
-            APPROACHES[3].0,
-            APPROACHES[4].0,
-            APPROACHES[5].0,
-        ],
+        &header,
     );
     let cell = |e: Option<f64>| e.map_or("—".to_string(), fmt_num);
-    for (i, (d, mph)) in out.passes.iter().enumerate() {
-        let mut row = vec![(i + 1).to_string(), fmt_num(*d), fmt_num(*mph)];
-        row.extend((0..APPROACHES.len()).map(|a| cell(out.errors[a][i])));
+    for (i, pass) in out.passes.iter().enumerate() {
+        let mut row = vec![
+            (i + 1).to_string(),
+            fmt_num(pass.duration_s),
+            fmt_num(pass.speed_mph),
+        ];
+        row.extend(out.errors.iter().map(|(_, e)| cell(e[i])));
         per_pass.row(row);
     }
     let mut avg_row = vec!["mean ± 95 % CI".into(), String::new(), String::new()];
-    for a in 0..APPROACHES.len() {
-        let found: Vec<f64> = out.errors[a].iter().flatten().copied().collect();
+    for (_, errors) in out.errors.iter() {
+        let found: Vec<f64> = errors.iter().flatten().copied().collect();
         let (m, c) = mean_ci(&found);
         avg_row.push(if found.is_empty() {
             "—".into()
@@ -421,9 +539,9 @@ fn per_pass_table(out: &Output) -> Table {
         ),
     ] {
         let mut gain_row = vec![label.into(), String::new(), String::new()];
-        gain_row.extend((0..APPROACHES.len()).map(|a| {
-            fusion_gain(out, a, over).map_or(String::new(), |(m, c)| {
-                format!("{} ± {}", fmt_num(m), fmt_num(c))
+        gain_row.extend(Approach::ALL.map(|a| {
+            fusion_gain(out, a, over).map_or(String::new(), |g| {
+                format!("{} ± {}", fmt_num(g.mean), fmt_num(g.ci95))
             })
         }));
         per_pass.row(gain_row);
@@ -437,56 +555,68 @@ fn multi_table(out: &Output) -> Table {
         "Multi-vehicle runs (not attempted in the paper): MOTA and mean OSPA (order 1) per approach",
         &["run", "vehicles", "approach", "MOTA", "mean OSPA (m)"],
     );
-    for (r, (n, mota, ospa)) in out.multi.iter().enumerate() {
-        for (a, (name, _, _)) in APPROACHES.iter().enumerate() {
+    for (r, run) in out.multi.iter().enumerate() {
+        for (a, s) in run.scores.iter() {
             multi.row(vec![
                 (r + 1).to_string(),
-                n.to_string(),
-                (*name).into(),
-                fmt_num(mota[a]),
-                fmt_num(ospa[a]),
+                run.vehicles.to_string(),
+                a.name().into(),
+                fmt_num(s.mota),
+                fmt_num(s.ospa),
             ]);
         }
     }
     multi
 }
 
+/// The approaches of the calibration sweep: the product rule's.
+fn swept() -> impl Iterator<Item = Approach> {
+    Approach::ALL.into_iter().filter(|a| a.is_product())
+}
+
 /// The average error against the nodes' heading error, product rule.
 fn sweep_table(out: &Output) -> Table {
     let cell = |e: Option<f64>| e.map_or("—".to_string(), fmt_num);
+    let mut header = vec!["heading error δ (°)"];
+    header.extend(swept().map(Approach::name));
     let mut sweep_table = Table::new(
         "Average error (m) over the passes against the heading error δ of every node (cameras and acoustic nodes alike, signs alternating), product rule",
-        &[
-            "heading error δ (°)",
-            APPROACHES[3].0,
-            APPROACHES[4].0,
-            APPROACHES[5].0,
-        ],
+        &header,
     );
-    for (s, deg) in out.sweep_deg.iter().enumerate() {
-        sweep_table.row(vec![
-            fmt_num(*deg),
-            cell(average(&out.sweep[s][3])),
-            cell(average(&out.sweep[s][4])),
-            cell(average(&out.sweep[s][5])),
-        ]);
+    for point in &out.sweep {
+        let mut row = vec![fmt_num(point.heading_error_deg)];
+        row.extend(swept().map(|a| cell(average(point.errors.get(a)))));
+        sweep_table.row(row);
     }
     sweep_table
+}
+
+/// An approach's place within its rule's group of bars and its colour: audio 0, video 1,
+/// audio+video 2.
+fn modality_slot(a: Approach) -> usize {
+    match a.modalities() {
+        Modalities::Audio => 0,
+        Modalities::Video => 1,
+        Modalities::Both => 2,
+    }
 }
 
 /// Grouped bars per pass index, as the paper's Figs. 10-11 (the product rule's approaches or
 /// the weighted sum's); a missing bar is a pass with no track.
 fn bar_chart(out: &Output, rule_product: bool) -> Chart {
-    let offset = if rule_product { 3 } else { 0 };
-    let series = (0..3)
-        .map(|m| {
-            let a = offset + m;
-            let pts = out.errors[a]
+    let series = Approach::ALL
+        .into_iter()
+        .filter(|a| a.is_product() == rule_product)
+        .map(|a| {
+            let m = modality_slot(a);
+            let pts = out
+                .errors
+                .get(a)
                 .iter()
                 .enumerate()
                 .filter_map(|(i, e)| e.map(|e| ((i + 1) as f64 + BAR_WIDTH * (m as f64 - 1.0), e)))
                 .collect();
-            Series::new(APPROACHES[a].0, pts, Style::Bars, m)
+            Series::new(a.name(), pts, Style::Bars, m)
         })
         .collect();
     Chart::new(
@@ -507,15 +637,12 @@ fn figures(out: &Output) -> Vec<Figure> {
         "Average error of the six approaches",
         "approach (1–3: sum, 4–6: product; audio, video, audio+video)",
         "average error (m)",
-        (0..APPROACHES.len())
-            .filter_map(|a| {
-                average(&out.errors[a]).map(|e| {
-                    Series::new(
-                        APPROACHES[a].0,
-                        vec![((a + 1) as f64, e)],
-                        Style::Bars,
-                        a % 3,
-                    )
+        out.errors
+            .iter()
+            .filter_map(|(a, errors)| {
+                average(errors).map(|e| {
+                    let x = (a.index() + 1) as f64;
+                    Series::new(a.name(), vec![(x, e)], Style::Bars, modality_slot(a))
                 })
             })
             .collect(),
@@ -524,16 +651,14 @@ fn figures(out: &Output) -> Vec<Figure> {
         "Error against calibration error",
         "heading error δ of cameras and acoustic nodes (°)",
         "average error (m)",
-        [3usize, 4, 5]
-            .iter()
-            .map(|&a| {
+        swept()
+            .map(|a| {
                 let pts = out
-                    .sweep_deg
+                    .sweep
                     .iter()
-                    .enumerate()
-                    .filter_map(|(s, d)| average(&out.sweep[s][a]).map(|e| (*d, e)))
+                    .filter_map(|s| average(s.errors.get(a)).map(|e| (s.heading_error_deg, e)))
                     .collect();
-                Series::new(APPROACHES[a].0, pts, Style::Line, a)
+                Series::new(a.name(), pts, Style::Line, a.index())
             })
             .collect(),
     );
@@ -569,8 +694,8 @@ fn map_figure(map: &MapData) -> Figure {
         let pts = map
             .cells
             .iter()
-            .filter(|(_, _, v)| v >= lo && v < hi)
-            .map(|(x, y, _)| (*x, *y))
+            .filter(|c| c.likelihood >= *lo && c.likelihood < *hi)
+            .map(|c| (c.x, c.y))
             .collect();
         series.push(Series::new(
             &format!("likelihood {lo}–{}", hi.min(1.0)),
@@ -603,8 +728,8 @@ fn map_figure(map: &MapData) -> Figure {
             label,
             map.sensors
                 .iter()
-                .filter(|s| s.2 == kind)
-                .map(|s| (s.0, s.1))
+                .filter(|s| s.kind == kind)
+                .map(|s| (s.x, s.y))
                 .collect(),
             Style::Markers,
             colour,
@@ -617,19 +742,30 @@ fn map_figure(map: &MapData) -> Figure {
     )
 }
 
-/// The section's text: the setting, the averages against the paper's, where fusion gains
-/// and where it loses (the prose is `summary.txt`).
-fn summary(out: &Output) -> String {
-    // Where audio alone beats fusion, per rule.
-    let audio_wins: Vec<String> = [(0usize, 2usize, "sum"), (3, 5, "product")]
+/// Audio alone against audio+video under one rule: (audio, audio+video, the rule's name).
+const RULES: [(Approach, Approach, &str); 2] = [
+    (Approach::AudioSum, Approach::AudioVideoSum, "sum"),
+    (
+        Approach::AudioProduct,
+        Approach::AudioVideoProduct,
+        "product",
+    ),
+];
+
+/// Per rule, the single-vehicle passes (numbered from 1) where audio alone beats audio+video
+/// (a lower error, or a track where fusion formed none).
+fn audio_wins(out: &Output) -> Vec<String> {
+    RULES
         .iter()
-        .map(|&(a, b, rule)| {
+        .map(|&(audio, both, rule)| {
             let passes: Vec<String> = (0..out.passes.len())
-                .filter(|&i| match (out.errors[a][i], out.errors[b][i]) {
-                    (Some(ea), Some(eb)) => ea < eb,
-                    (Some(_), None) => true,
-                    _ => false,
-                })
+                .filter(
+                    |&i| match (out.errors.get(audio)[i], out.errors.get(both)[i]) {
+                        (Some(ea), Some(eb)) => ea < eb,
+                        (Some(_), None) => true,
+                        _ => false,
+                    },
+                )
                 .map(|i| (i + 1).to_string())
                 .collect();
             if passes.is_empty() {
@@ -638,41 +774,50 @@ fn summary(out: &Output) -> String {
                 format!("under the {rule} rule, on passes {}", passes.join(", "))
             }
         })
+        .collect()
+}
+
+/// The multi-vehicle runs (numbered from 1) whose MOTAs of approaches `a` and `b` satisfy
+/// `pick`, as a phrase for the rule `rule`.
+fn runs_where(
+    out: &Output,
+    a: Approach,
+    b: Approach,
+    rule: &str,
+    pick: fn(f64, f64) -> bool,
+) -> String {
+    let runs: Vec<String> = out
+        .multi
+        .iter()
+        .enumerate()
+        .filter(|(_, run)| pick(run.scores.get(a).mota, run.scores.get(b).mota))
+        .map(|(r, _)| (r + 1).to_string())
         .collect();
-    // The multi-vehicle runs (numbered from 1) whose MOTAs satisfy `pick`, per rule.
-    let runs_where = |a: usize, b: usize, rule: &str, pick: fn(f64, f64) -> bool| {
-        let runs: Vec<String> = out
-            .multi
-            .iter()
-            .enumerate()
-            .filter(|(_, (_, mota, _))| pick(mota[a], mota[b]))
-            .map(|(r, _)| (r + 1).to_string())
-            .collect();
-        match runs.len() {
-            0 => format!("under the {rule} rule, on no run"),
-            1 => format!("under the {rule} rule, on run {}", runs[0]),
-            _ => format!("under the {rule} rule, on runs {}", runs.join(", ")),
-        }
-    };
+    match runs.len() {
+        0 => format!("under the {rule} rule, on no run"),
+        1 => format!("under the {rule} rule, on run {}", runs[0]),
+        _ => format!("under the {rule} rule, on runs {}", runs.join(", ")),
+    }
+}
+
+/// The section's text: the setting, the averages against the paper's, where fusion gains
+/// and where it loses (the prose is `summary.txt`).
+fn summary(out: &Output) -> String {
     // Audio+video below the issue's MOTA 0.8, and audio alone ahead of it.
-    let short_of_target = [
-        runs_where(2, 2, "sum", |m, _| m < 0.8),
-        runs_where(5, 5, "product", |m, _| m < 0.8),
-    ];
-    let audio_wins_multi = [
-        runs_where(0, 2, "sum", |audio, both| audio > both),
-        runs_where(3, 5, "product", |audio, both| audio > both),
-    ];
-    let av = |a: usize| average(&out.errors[a]).map_or("—".into(), fmt_num);
-    let gain = |a: usize| {
-        fusion_gain(out, a, Modalities::Audio).map_or("—".into(), |(m, c)| {
-            format!("{} ± {}", fmt_num(m), fmt_num(c))
+    let short_of_target =
+        RULES.map(|(_, both, rule)| runs_where(out, both, both, rule, |m, _| m < 0.8));
+    let audio_wins_multi = RULES
+        .map(|(audio, both, rule)| runs_where(out, audio, both, rule, |audio, both| audio > both));
+    let av = |a: Approach| average(out.errors.get(a)).map_or("—".into(), fmt_num);
+    let gain = |a: Approach| {
+        fusion_gain(out, a, Modalities::Audio).map_or("—".into(), |g| {
+            format!("{} ± {}", fmt_num(g.mean), fmt_num(g.ci95))
         })
     };
-    let motas = |a: usize| {
+    let motas = |a: Approach| {
         out.multi
             .iter()
-            .map(|(_, m, _)| fmt_num(m[a]))
+            .map(|run| fmt_num(run.scores.get(a).mota))
             .collect::<Vec<_>>()
             .join(", ")
     };
@@ -681,17 +826,17 @@ fn summary(out: &Output) -> String {
         &[
             ("camera_error", fmt_num(out.calibration_error_deg)),
             ("audio_error", fmt_num(out.audio_calibration_error_deg)),
-            ("av_sum", av(2)),
-            ("av_product", av(5)),
-            ("audio_sum", av(0)),
-            ("audio_product", av(3)),
-            ("video_sum", av(1)),
-            ("video_product", av(4)),
-            ("gain_sum", gain(2)),
-            ("gain_product", gain(5)),
-            ("audio_wins", audio_wins.join("; ")),
-            ("mota_sum", motas(2)),
-            ("mota_product", motas(5)),
+            ("av_sum", av(Approach::AudioVideoSum)),
+            ("av_product", av(Approach::AudioVideoProduct)),
+            ("audio_sum", av(Approach::AudioSum)),
+            ("audio_product", av(Approach::AudioProduct)),
+            ("video_sum", av(Approach::VideoSum)),
+            ("video_product", av(Approach::VideoProduct)),
+            ("gain_sum", gain(Approach::AudioVideoSum)),
+            ("gain_product", gain(Approach::AudioVideoProduct)),
+            ("audio_wins", audio_wins(out).join("; ")),
+            ("mota_sum", motas(Approach::AudioVideoSum)),
+            ("mota_product", motas(Approach::AudioVideoProduct)),
             ("n_multi", out.multi.len().to_string()),
             ("short_of_target", short_of_target.join("; ")),
             ("audio_wins_multi", audio_wins_multi.join("; ")),
@@ -699,8 +844,11 @@ fn summary(out: &Output) -> String {
     )
 }
 
-fn key(name: &str) -> String {
-    name.replace([',', '+'], "")
+/// The approach's part of metric names: its name without punctuation, words joined by `_`
+/// (`audio_sum`, ..., `audiovideo_product`).
+fn metric_key(a: Approach) -> String {
+    a.name()
+        .replace([',', '+'], "")
         .replace(' ', "_")
         .to_lowercase()
         .replace("__", "_")
@@ -709,29 +857,49 @@ fn key(name: &str) -> String {
 /// For an audio+video approach: the paired per-pass gain over one modality alone under the
 /// same rule (that modality's error − audio+video's, over the passes where both formed a
 /// track), mean and 95 % CI half-width. `None` for the other approaches.
-fn fusion_gain(out: &Output, a: usize, over: Modalities) -> Option<(f64, f64)> {
-    let single = match (a, over) {
-        (2, Modalities::Audio) => 0,
-        (2, Modalities::Video) => 1,
-        (5, Modalities::Audio) => 3,
-        (5, Modalities::Video) => 4,
-        _ => return None,
-    };
-    let gains: Vec<f64> = out.errors[single]
+fn fusion_gain(out: &Output, a: Approach, over: Modalities) -> Option<MeanCi> {
+    if a.modalities() != Modalities::Both || over == Modalities::Both {
+        return None;
+    }
+    let single = Approach::new(over, a.is_product());
+    let gains: Vec<f64> = out
+        .errors
+        .get(single)
         .iter()
-        .zip(&out.errors[a])
+        .zip(out.errors.get(a))
         .filter_map(|(x, y)| Some((*x)? - (*y)?))
         .collect();
-    let (mean, ci) = mean_ci(&gains);
-    mean.is_finite().then_some((mean, ci))
+    let (mean, ci95) = mean_ci(&gains);
+    mean.is_finite().then_some(MeanCi { mean, ci95 })
 }
 
 /// Whether a paired gain's 95 % CI lies above 0.
-fn significant(gain: Option<(f64, f64)>) -> bool {
-    gain.is_some_and(|(mean, ci)| mean - ci > 0.0)
+fn significant(gain: Option<MeanCi>) -> bool {
+    gain.is_some_and(|g| g.mean - g.ci95 > 0.0)
 }
 
 fn average(values: &[Option<f64>]) -> Option<f64> {
     let found: Vec<f64> = values.iter().flatten().copied().collect();
     (!found.is_empty()).then(|| found.iter().sum::<f64>() / found.len() as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metric_keys_are_the_approach_names_without_punctuation() {
+        let keys = Approach::ALL.map(metric_key);
+        assert_eq!(
+            keys,
+            [
+                "audio_sum",
+                "video_sum",
+                "audiovideo_sum",
+                "audio_product",
+                "video_product",
+                "audiovideo_product"
+            ]
+        );
+    }
 }
