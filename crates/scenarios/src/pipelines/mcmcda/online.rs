@@ -261,7 +261,8 @@ const MIN_DRAWN_SCANS: usize = 5;
 fn figures(out: &Output) -> Vec<Figure> {
     // Only the first series of each kind is named, so the legend has one entry per kind.
     let name = |i: usize, label: &'static str| if i == 0 { label } else { "" };
-    // Smoothed tracks may run a little past the region's edge; the map shows the region.
+    // Targets walk out of the region and smoothed tracks run a little past its edge; the
+    // map shows the region only (the scene's outskirts made it a small square in the middle).
     let region = &out.simulation.region;
     let inside = |&(x, y): &(f64, f64)| region.contains(&tracker_model::Vec2::new(x, y));
     let drawn: Vec<Vec<(f64, f64)>> = out
@@ -282,7 +283,7 @@ fn figures(out: &Output) -> Vec<Figure> {
     series.extend(out.truth_paths.iter().enumerate().map(|(i, pts)| {
         Series::new(
             name(i, "true trajectories"),
-            pts.clone(),
+            pts.iter().copied().filter(inside).collect(),
             Style::ThinLine,
             7,
         )
