@@ -434,15 +434,7 @@ pub fn run_specs(p: &Params) -> Result<Vec<RunSpec>> {
 /// Checks the parameters before any run: passes, the tuning seeds apart from the reported
 /// `seed`, the multi-vehicle beamformer, the peak-score tables and every approach's settings.
 pub fn check_params(p: &Params, seed: u64) -> Result<()> {
-    if p.passes.is_empty() {
-        return Err(invalid("passes", "no passes"));
-    }
-    if p.pad_s.is_nan() || p.pad_s < 0.0 {
-        return Err(invalid("pad_s", format!("{} must be >= 0", p.pad_s)));
-    }
-    if !p.passes.iter().all(|s| s.duration_s > 0.0) {
-        return Err(invalid("passes", "pass durations must be > 0"));
-    }
+    check_sizes(p)?;
     // Everything chosen or learnt on seeds is chosen on seeds other than the reported one.
     for (table, seeds) in [
         ("[params.tuning]", &p.tuning.seeds),
@@ -485,6 +477,85 @@ pub fn check_params(p: &Params, seed: u64) -> Result<()> {
                 n.check()?;
             }
         }
+    }
+    Ok(())
+}
+
+/// The longest run simulated, s: every run's audio is held in memory at the beamformer's
+/// sample rate and its video rendered frame by frame, so a typo in a duration (`pad_s = 1e6`)
+/// must be an error, not a request for 128 GB.
+pub const MAX_RUN_S: f64 = 600.0;
+
+/// The most runs, vehicles in a run and pixels of a camera image.
+const MAX_RUNS: usize = 1000;
+const MAX_VEHICLES: usize = 50;
+const MAX_IMAGE_SIDE: usize = 8192;
+
+/// Every count, size and duration the scenario file sets, before anything is simulated.
+fn check_sizes(p: &Params) -> Result<()> {
+    if p.passes.is_empty() || p.passes.len() + p.multi.len() > MAX_RUNS {
+        return Err(invalid(
+            "passes",
+            format!(
+                "{} passes and {} multi-vehicle runs; 1 to {MAX_RUNS} runs",
+                p.passes.len(),
+                p.multi.len()
+            ),
+        ));
+    }
+    let seconds = |name: &'static str, v: f64, lo_open: bool| {
+        let ok = v.is_finite() && v <= MAX_RUN_S && if lo_open { v > 0.0 } else { v >= 0.0 };
+        if ok {
+            Ok(())
+        } else {
+            let low = if lo_open { "(0" } else { "[0" };
+            Err(invalid(
+                name,
+                format!("{v} s must be in {low}, {MAX_RUN_S}]"),
+            ))
+        }
+    };
+    seconds("pad_s", p.pad_s, false)?;
+    for pass in &p.passes {
+        seconds("duration_s", pass.duration_s, true)?;
+    }
+    for run in &p.multi {
+        if run.is_empty() || run.len() > MAX_VEHICLES {
+            return Err(invalid(
+                "multi",
+                format!("{} vehicles in a run; 1 to {MAX_VEHICLES}", run.len()),
+            ));
+        }
+        for v in run {
+            seconds("enter_s", v.enter_s, false)?;
+            if !(v.speed_mph.is_finite() && v.speed_mph > 0.0 && v.speed_mph <= 200.0) {
+                return Err(invalid(
+                    "speed_mph",
+                    format!("{} must be in (0, 200]", v.speed_mph),
+                ));
+            }
+        }
+    }
+    for spec in run_specs(p)? {
+        seconds(
+            "a run (pad_s + its vehicles + pad_s)",
+            spec.duration_s,
+            true,
+        )?;
+    }
+    let v = &p.video;
+    let sides_ok = [v.width, v.height]
+        .iter()
+        .all(|s| (16..=MAX_IMAGE_SIDE).contains(s));
+    let fps_ok = v.fps.is_finite() && v.fps > 0.0 && v.fps <= 1000.0;
+    if !(sides_ok && fps_ok && v.warmup_frames <= 100_000) {
+        return Err(invalid(
+            "video",
+            format!(
+                "{} × {} px at {} fps, {} warm-up frames; sides 16 to {MAX_IMAGE_SIDE} px, fps in (0, 1000], at most 100000 warm-up frames",
+                v.width, v.height, v.fps, v.warmup_frames
+            ),
+        ));
     }
     Ok(())
 }

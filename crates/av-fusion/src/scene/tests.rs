@@ -35,6 +35,29 @@ fn the_committed_parameters_pass() {
 }
 
 #[test]
+fn huge_or_broken_durations_and_sizes_are_errors_before_any_run() {
+    // pad_s = 1e300 panicked with "capacity overflow" and 1e6 aborted asking for 128 GB.
+    for pad in [1e300, 1e6, f64::NAN, -1.0, f64::INFINITY] {
+        let p = Params {
+            pad_s: pad,
+            ..committed()
+        };
+        assert!(rejected(&p, 1801).contains("pad_s"), "{pad}");
+    }
+    let mut p = committed();
+    p.video.width = 0;
+    assert!(rejected(&p, 1801).contains("video"));
+    let mut p = committed();
+    p.passes[0].duration_s = 1e9;
+    assert!(rejected(&p, 1801).contains("duration_s"));
+    let mut p = committed();
+    if let Some(v) = p.multi.first_mut().and_then(|run| run.first_mut()) {
+        v.enter_s = 1e7;
+        assert!(rejected(&p, 1801).contains("enter_s"));
+    }
+}
+
+#[test]
 fn bad_score_settings_and_reused_seeds_are_rejected_before_any_run() {
     let good = committed();
     // A malformed table, even of an unscored approach.

@@ -704,21 +704,14 @@ fn map_figure(map: &MapData) -> Figure {
             [7, 2, 1][k],
         ));
     }
+    // The truth and the tracks over the likelihood dots, which hid the thin grey truth.
     for (i, t) in map.truth.iter().enumerate() {
-        series.push(Series::new(
-            if i == 0 { "truth" } else { "" },
-            t.clone(),
-            Style::ThinLine,
-            7,
-        ));
+        let label = if i == 0 { "truth" } else { "" };
+        series.push(Series::new(label, t.clone(), Style::Line, 5).in_front());
     }
     for (i, t) in map.tracks.iter().enumerate() {
-        series.push(Series::new(
-            if i == 0 { "tracks" } else { "" },
-            t.clone(),
-            Style::Line,
-            0,
-        ));
+        let label = if i == 0 { "tracks" } else { "" };
+        series.push(Series::new(label, t.clone(), Style::Line, 0).in_front());
     }
     for (kind, label, colour) in [
         (SensorKind::Audio, "acoustic nodes", 3),
@@ -738,7 +731,7 @@ fn map_figure(map: &MapData) -> Figure {
     Figure::new(
         "map",
         "Last multi-vehicle run, audio+video product: the fused likelihood (each tick scaled to maximum 1, maximum over the ticks) with the tracks over it",
-        Chart::new("Fused likelihood and tracks", "x (m)", "y (m)", series),
+        Chart::new("Fused likelihood and tracks", "x (m)", "y (m)", series).with_equal_aspect(),
     )
 }
 
