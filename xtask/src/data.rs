@@ -20,6 +20,9 @@ pub const NAMES: [&str; 1] = ["vtest"];
 /// The frames of `vtest.avi` used for development.
 pub const VTEST_FRAMES: (u32, u32) = (300, 794);
 
+/// How many they are.
+pub const VTEST_FRAME_COUNT: usize = (VTEST_FRAMES.1 - VTEST_FRAMES.0 + 1) as usize;
+
 /// The cache folder.
 pub fn cache_dir() -> Result<PathBuf> {
     if let Some(dir) = std::env::var_os("TRACKING_DATA_DIR") {
@@ -87,7 +90,7 @@ fn fetch_vtest() -> Result<PathBuf> {
     let root = cache_dir()?.join("vtest");
     let frames = root.join("frames");
     let (first, last) = VTEST_FRAMES;
-    let expected = (last - first + 1) as usize;
+    let expected = VTEST_FRAME_COUNT;
     if count_pngs(&frames) == expected {
         return Ok(frames);
     }

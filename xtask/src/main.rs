@@ -16,6 +16,7 @@ mod eval;
 mod fuzz;
 mod junit;
 mod plot;
+mod real_video;
 mod report;
 mod scenario;
 mod screenshot;

@@ -115,7 +115,10 @@ fn load_file(path: &Path) -> Result<ScenarioFile> {
 /// Runs scenarios in parallel (each on its own seeded generator), returning results in name
 /// order. A progress bar per scenario is drawn when stderr is a terminal; otherwise (a CI log,
 /// a pipe) a line when each scenario finishes, so a long run is never silent.
-#[expect(clippy::print_stderr, reason = "progress lines when stderr is not a terminal")]
+#[expect(
+    clippy::print_stderr,
+    reason = "progress lines when stderr is not a terminal"
+)]
 pub fn run_all(scenarios: Vec<Scenario>) -> Vec<RunResult> {
     let terminal = std::io::stderr().is_terminal();
     let total = scenarios.len();
