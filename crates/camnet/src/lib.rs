@@ -16,7 +16,10 @@
 //!   [`match_tracks_guided`]: the same from a known approximate pose;
 //! * [`localise`]: the network, with a pose and its [`PoseRoute`] for every pair of placed
 //!   cameras and an optional joint refinement ([`bundle_adjust`]);
-//! * [`umeyama`]: similarity alignment, for scoring against the truth.
+//! * [`umeyama`]: similarity alignment, for scoring against the truth;
+//! * [`scene`]: the simulated scene of the paper's experiment (people walking, cameras on a
+//!   ring, a blob detector with pixel noise, misses and false blobs) and scoring against its
+//!   truth.
 //!
 //! The step every camera pair runs: the relative pose of two cameras from points matched
 //! between their images (here exact, so the pose is recovered to rounding):
@@ -49,6 +52,7 @@ mod essential;
 mod geometry;
 mod network;
 mod refine;
+pub mod scene;
 mod tracks;
 
 #[cfg(test)]

@@ -17,7 +17,9 @@
 //!   fits whose size is cross-validated on the observations;
 //! * segment linking ([`link_segments`]): gated goal-directed likelihood costs and an optimal
 //!   one-to-one assignment;
-//! * Oh & Jung's evaluation protocol: [`gaps_from_mask`] turns masked crossings into gaps.
+//! * Oh & Jung's evaluation protocol: [`gaps_from_mask`] turns masked crossings into gaps;
+//!   [`scene`] simulates their pedestrian scenes (walkers with detector noise) and cuts the
+//!   observed gaps.
 //!
 //! Oh & Jung's special forms (their eqs. 11-18: invertible H, pseudo-inverse) are
 //! [`GoalDirected::pseudo_inverse_form`]; tests show where they equal the general form.
@@ -56,6 +58,7 @@ mod goal;
 mod link;
 mod noise;
 mod protocol;
+pub mod scene;
 mod search;
 
 #[cfg(test)]

@@ -7,21 +7,13 @@
 //! pairwise rotation and translation-direction errors, camera positions after a similarity
 //! alignment, correspondence precision and recall, over a sweep of pixel noise.
 
-use std::collections::BTreeMap;
-
-use anyhow::{Context, Result};
-use camnet::{
-    Blob, CameraTracks, ImageTrack, ImageTrackConfig, Intrinsics, Network, NetworkConfig, Pose,
-    PoseRoute, angle_between_deg, image_tracks, localise, project, rotation_error_deg, umeyama,
-};
-use mcmcda::{McmcdaConfig, OnlineConfig, TrackEnd};
-use nalgebra::{Matrix2, Vector2, Vector3};
-use rand::RngExt;
+use anyhow::Result;
+use camnet::scene::{PairScore, Scene, SceneConfig, align_cameras, score_pairs};
+use camnet::{NetworkConfig, PoseRoute, localise};
+use nalgebra::Vector3;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal, Poisson};
 use rayon::prelude::*;
 use serde::Deserialize;
-use tracker_model::{ConstantVelocity2, Frame, Vec2};
 
 use crate::pipelines::mcmcda::mean_ci;
 use crate::{
@@ -78,17 +70,26 @@ pub struct Params {
     network: NetworkConfig,
 }
 
-/// One camera pair in one run.
-#[derive(Debug, Clone)]
-struct PairScore {
-    a: usize,
-    b: usize,
-    /// True track pairs (same person, overlapping) available.
-    shared_tracks: usize,
-    /// (rotation error °, translation-direction error °) when estimated.
-    error_deg: Option<(f64, f64)>,
-    /// Where the pose came from.
-    route: Option<PoseRoute>,
+impl Params {
+    /// The simulated scene these parameters describe.
+    fn scene(&self) -> SceneConfig {
+        SceneConfig {
+            n_cameras: self.n_cameras,
+            ring_radius_m: self.ring_radius_m,
+            camera_height_m: self.camera_height_m,
+            aim_offset_m: self.aim_offset_m,
+            aim_turn_deg: self.aim_turn_deg,
+            image_size: self.image_size,
+            focal_px: self.focal_px,
+            n_people: self.n_people,
+            area_half_m: self.area_half_m,
+            speed_m_per_frame: self.speed_m_per_frame,
+            person_height_m: self.person_height_m,
+            n_frames: self.n_frames,
+            p_detect: self.p_detect,
+            false_blobs_per_frame: self.false_blobs_per_frame,
+        }
+    }
 }
 
 /// One scene.
@@ -132,358 +133,19 @@ pub struct Output {
     n_cameras: usize,
 }
 
-struct Person {
-    start: Frame,
-    end: Frame,
-    height: f64,
-    ground: Vec<Vector3<f64>>,
-}
-
-fn walk(p: &Params, rng: &mut ChaCha8Rng) -> Vec<Person> {
-    let n = p.n_frames;
-    (0..p.n_people)
-        .map(|_| {
-            let len = rng.random_range(n / 2..=n);
-            let start = rng.random_range(0..=n - len);
-            let a = p.area_half_m;
-            let mut pos = Vector3::new(rng.random_range(-a..a), rng.random_range(-a..a), 0.0);
-            let mut goal = Vector3::new(rng.random_range(-a..a), rng.random_range(-a..a), 0.0);
-            let mut ground = Vec::with_capacity(len as usize);
-            let mut heading = (goal - pos).normalize();
-            for _ in 0..len {
-                if (goal - pos).norm() < 1.0 {
-                    goal = Vector3::new(rng.random_range(-a..a), rng.random_range(-a..a), 0.0);
-                }
-                // Turn smoothly towards the waypoint (at most 6° per frame).
-                let want = (goal - pos).normalize();
-                let angle = heading.y.atan2(heading.x);
-                let target = want.y.atan2(want.x);
-                let d = (target - angle + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
-                    - std::f64::consts::PI;
-                let angle = angle + d.clamp(-0.1, 0.1);
-                heading = Vector3::new(angle.cos(), angle.sin(), 0.0);
-                pos += heading * p.speed_m_per_frame;
-                ground.push(pos);
-            }
-            Person {
-                start,
-                end: start + len,
-                height: rng.random_range(p.person_height_m[0]..p.person_height_m[1]),
-                ground,
-            }
-        })
-        .collect()
-}
-
-fn cameras(p: &Params, rng: &mut ChaCha8Rng) -> Result<Vec<Pose>> {
-    (0..p.n_cameras)
-        .map(|k| {
-            let theta = std::f64::consts::TAU * k as f64 / p.n_cameras as f64
-                + rng.random_range(-0.15..0.15);
-            let h = rng.random_range(p.camera_height_m[0]..p.camera_height_m[1]);
-            let centre = Vector3::new(
-                p.ring_radius_m * theta.cos(),
-                p.ring_radius_m * theta.sin(),
-                h,
-            );
-            let aim = theta + std::f64::consts::PI + p.aim_turn_deg.to_radians();
-            let target = Vector3::new(p.aim_offset_m * aim.cos(), p.aim_offset_m * aim.sin(), 0.8);
-            Pose::look_at(&centre, &target).context("camera looks straight down")
-        })
-        .collect()
-}
-
-/// One camera's blobs per frame with each blob's true person (`None` for a false blob).
-type Detections = (Vec<(Frame, Vec<Blob>)>, Vec<Vec<Option<usize>>>);
-
-fn detect(
+/// One scene of Meingast, Oh & Sastry (2007)'s experiment: people walk, every camera tracks
+/// them, camnet localises the network, and the result is scored against the truth.
+fn run_scene(
     p: &Params,
-    k: &Intrinsics,
-    cam: &Pose,
-    people: &[Person],
-    noise_px: f64,
-    rng: &mut ChaCha8Rng,
-) -> Result<Detections> {
-    let noise = Normal::new(0.0, noise_px.max(1e-12))?;
-    let clutter = Poisson::new(p.false_blobs_per_frame.max(1e-9))?;
-    let (w, h) = (p.image_size[0], p.image_size[1]);
-    let inside = |u: &Vector2<f64>| u.x >= 0.0 && u.x < w && u.y >= 0.0 && u.y < h;
-    let mut scans = Vec::new();
-    let mut labels = Vec::new();
-    for f in 0..p.n_frames {
-        let mut blobs = Vec::new();
-        let mut who = Vec::new();
-        for (i, person) in people.iter().enumerate() {
-            if f < person.start || f >= person.end {
-                continue;
-            }
-            let g = person.ground[(f - person.start) as usize];
-            let px = |z: f64| project(&cam.apply(&(g + Vector3::z() * z))).map(|x| k.to_pixel(&x));
-            let (Some(top), Some(mid), Some(bottom)) =
-                (px(person.height), px(0.5 * person.height), px(0.0))
-            else {
-                continue;
-            };
-            if !(inside(&top) && inside(&bottom)) || rng.random::<f64>() >= p.p_detect {
-                continue;
-            }
-            let mut jitter =
-                |v: Vector2<f64>| v + Vector2::new(noise.sample(rng), noise.sample(rng));
-            blobs.push(Blob {
-                centre: jitter(mid),
-                top: jitter(top),
-                bottom: jitter(bottom),
-            });
-            who.push(Some(i));
-        }
-        let n_false = clutter.sample(rng) as usize;
-        for _ in 0..n_false {
-            let c = Vec2::new(rng.random_range(0.0..w), rng.random_range(0.0..h));
-            let half = rng.random_range(20.0..80.0);
-            blobs.push(Blob {
-                centre: c,
-                top: c - Vec2::new(0.0, half),
-                bottom: c + Vec2::new(0.0, half),
-            });
-            who.push(None);
-        }
-        scans.push((f, blobs));
-        labels.push(who);
-    }
-    Ok((scans, labels))
-}
-
-/// The person most of a track's blobs come from (`None` if false blobs dominate).
-fn majority(track: &ImageTrack, labels: &[Vec<Option<usize>>]) -> Option<usize> {
-    let mut count: BTreeMap<Option<usize>, usize> = BTreeMap::new();
-    for &(s, k) in &track.sources {
-        *count.entry(labels[s][k]).or_default() += 1;
-    }
-    count
-        .into_iter()
-        .max_by_key(|&(l, c)| (c, std::cmp::Reverse(l)))
-        .and_then(|(l, _)| l)
-}
-
-fn overlap(a: &ImageTrack, b: &ImageTrack) -> usize {
-    let (mut i, mut j, mut n) = (0, 0, 0);
-    while i < a.frames.len() && j < b.frames.len() {
-        match a.frames[i].cmp(&b.frames[j]) {
-            std::cmp::Ordering::Less => i += 1,
-            std::cmp::Ordering::Greater => j += 1,
-            std::cmp::Ordering::Equal => {
-                n += 1;
-                i += 1;
-                j += 1;
-            }
-        }
-    }
-    n
-}
-
-/// The cameras' pinhole intrinsics: the focal length of the parameters, the principal point
-/// at the image centre.
-fn intrinsics(p: &Params) -> Intrinsics {
-    Intrinsics {
-        fx: p.focal_px,
-        fy: p.focal_px,
-        cx: 0.5 * p.image_size[0],
-        cy: 0.5 * p.image_size[1],
-    }
-}
-
-/// The per-camera online MCMCDA that turns blobs into image tracks (Meingast, Oh & Sastry
-/// 2007 track objects in each image before matching), its measurement noise following the
-/// pixel noise.
-fn track_config(p: &Params, noise_px: f64) -> Result<ImageTrackConfig> {
-    let sigma = noise_px.max(0.5);
-    let max_speed = 60.0;
-    let model = McmcdaConfig {
-        volume: p.image_size[0] * p.image_size[1],
-        births_per_scan: 0.05,
-        clutter_per_scan: p.false_blobs_per_frame.max(0.01),
-        p_disappear: 0.01,
-        p_detect: p.p_detect.min(0.99),
-        motion: ConstantVelocity2::mcmcda(1.0, 4.0)?,
-        measurement_noise: Matrix2::identity() * (2.0 * sigma).powi(2),
-        max_gap: 4,
-        max_speed,
-        track_end: TrackEnd::Undetected,
-        ..McmcdaConfig::default()
-    };
-    Ok(ImageTrackConfig {
-        model,
-        online: OnlineConfig {
-            window: 8,
-            samples_per_scan: p.samples_per_scan,
-            ..OnlineConfig::default()
-        },
-        min_length: 10,
-    })
-}
-
-/// Each camera's image tracks (camera by camera, blobs drawn from `rng` in that order) and
-/// each track's majority person, the truth used only to score.
-type Tracked = (Vec<CameraTracks>, Vec<Vec<Option<usize>>>);
-
-/// Detects and tracks the people in every camera's images: the image tracks camnet's
-/// correspondence search takes (Meingast, Oh & Sastry 2007), with each track's true person.
-fn track_cameras(
-    p: &Params,
-    cams: &[Pose],
-    people: &[Person],
+    scene: &Scene,
     noise_px: f64,
     rng: &mut ChaCha8Rng,
     seed: u64,
-) -> Result<Tracked> {
-    let k = intrinsics(p);
-    let track_config = track_config(p, noise_px)?;
-    let mut inputs = Vec::new();
-    let mut labels = Vec::new();
-    for (c, cam) in cams.iter().enumerate() {
-        let (scans, who) = detect(p, &k, cam, people, noise_px, rng)?;
-        let tracks = image_tracks(&scans, &track_config, seed.wrapping_add(c as u64))?;
-        labels.push(tracks.iter().map(|t| majority(t, &who)).collect::<Vec<_>>());
-        inputs.push(CameraTracks {
-            intrinsics: k,
-            tracks,
-        });
-    }
-    Ok((inputs, labels))
-}
-
-/// The pairwise scores of one scene: every pair's errors, and the correspondence counts
-/// behind precision and recall.
-struct PairTally {
-    pairs: Vec<PairScore>,
-    chosen: usize,
-    correct: usize,
-    true_pairs: usize,
-}
-
-/// Scores every camera pair of the network against the truth: shared true track pairs, the
-/// matched tracks that are right, and the pose's rotation and translation-direction errors
-/// (the pairwise errors Meingast, Oh & Sastry 2007 report).
-fn score_pairs(
-    net: &Network,
-    (inputs, labels): &Tracked,
-    cams: &[Pose],
-    min_overlap: usize,
-) -> PairTally {
-    let mut pairs = Vec::new();
-    let (mut chosen, mut correct, mut true_pairs) = (0, 0, 0);
-    for pr in &net.pairs {
-        let (a, b) = (pr.a, pr.b);
-        let mut shared = 0;
-        for (i, ta) in inputs[a].tracks.iter().enumerate() {
-            for (j, tb) in inputs[b].tracks.iter().enumerate() {
-                if labels[a][i].is_some()
-                    && labels[a][i] == labels[b][j]
-                    && overlap(ta, tb) >= min_overlap
-                {
-                    shared += 1;
-                }
-            }
-        }
-        true_pairs += shared;
-        let truth = cams[b].compose(&cams[a].inverse());
-        if let Some(m) = &pr.matching {
-            chosen += m.matches.len();
-            correct += m
-                .matches
-                .iter()
-                .filter(|t| {
-                    labels[a][t.track_a].is_some() && labels[a][t.track_a] == labels[b][t.track_b]
-                })
-                .count();
-        }
-        let error_deg = pr.pose.map(|q| {
-            (
-                rotation_error_deg(&q.rotation, &truth.rotation),
-                angle_between_deg(&q.translation, &truth.translation),
-            )
-        });
-        pairs.push(PairScore {
-            a,
-            b,
-            shared_tracks: shared,
-            error_deg,
-            route: pr.route,
-        });
-    }
-    PairTally {
-        pairs,
-        chosen,
-        correct,
-        true_pairs,
-    }
-}
-
-/// The placed cameras after a similarity alignment to the truth.
-struct Alignment {
-    placed: Vec<usize>,
-    /// Position errors after the joint refinement, % of scene size.
-    position_error_pct: Vec<f64>,
-    /// The same before it.
-    position_error_pct_tree: Vec<f64>,
-    /// Aligned centre and optical axis per camera, for the top view.
-    est_cams: Vec<Option<(Vector3<f64>, Vector3<f64>)>>,
-}
-
-/// Similarity (Umeyama) alignment of the placed cameras' centres (camera 0's frame) to the
-/// truth, after and before the joint refinement: the camera position errors of Meingast, Oh &
-/// Sastry 2007, as % of the largest distance between cameras.
-fn align_cameras(net: &Network, cams: &[Pose]) -> Result<Alignment> {
-    let placed: Vec<usize> = (0..cams.len())
-        .filter(|&c| net.poses[c].is_some())
-        .collect();
-    let true_centres: Vec<Vector3<f64>> = cams.iter().map(Pose::centre).collect();
-    let scene = true_centres
-        .iter()
-        .flat_map(|a| true_centres.iter().map(move |b| (a - b).norm()))
-        .fold(0.0, f64::max);
-    let mut position_error_pct = Vec::new();
-    let mut position_error_pct_tree = Vec::new();
-    let mut est_cams = vec![None; cams.len()];
-    if placed.len() >= 3 {
-        let to: Vec<Vector3<f64>> = placed.iter().map(|&c| true_centres[c]).collect();
-        let before = net.bundle.as_ref().map_or(&net.poses, |b| &b.poses_before);
-        for (poses, errors, draw) in [
-            (&net.poses, &mut position_error_pct, true),
-            (before, &mut position_error_pct_tree, false),
-        ] {
-            let from: Vec<Vector3<f64>> = placed
-                .iter()
-                .filter_map(|&c| poses[c].map(|q| q.centre()))
-                .collect();
-            if from.len() != placed.len() {
-                continue;
-            }
-            let sim = umeyama(&from, &to)?;
-            for (&c, f) in placed.iter().zip(&from) {
-                let centre = sim.apply(f);
-                errors.push(100.0 * (centre - true_centres[c]).norm() / scene);
-                if draw && let Some(q) = poses[c] {
-                    let axis = sim.rotation * (q.rotation.inverse() * Vector3::z());
-                    est_cams[c] = Some((centre, axis));
-                }
-            }
-        }
-    }
-    Ok(Alignment {
-        placed,
-        position_error_pct,
-        position_error_pct_tree,
-        est_cams,
-    })
-}
-
-/// One scene of Meingast, Oh & Sastry (2007)'s experiment: people walk, every camera tracks
-/// them, camnet localises the network, and the result is scored against the truth.
-fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Result<RunScore> {
-    let people = walk(p, rng);
-    let cams = cameras(p, rng)?;
-    let tracked = track_cameras(p, &cams, &people, noise_px, rng, seed)?;
+) -> Result<RunScore> {
+    let people = scene.walk(rng);
+    let cams = scene.cameras(rng)?;
+    let config = scene.image_track_config(noise_px, p.samples_per_scan)?;
+    let tracked = scene.track_cameras(&cams, &people, noise_px, &config, rng, seed)?;
     // The inlier threshold follows the detector's known noise level: 3σ, at least the
     // configured value.
     let mut network = p.network;
@@ -491,8 +153,8 @@ fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Resu
         .correspondence
         .threshold_px
         .max(p.threshold_sigmas * noise_px);
-    let net = localise(&tracked.0, &network, seed)?;
-    let tally = score_pairs(&net, &tracked, &cams, p.network.correspondence.min_overlap);
+    let net = localise(&tracked.cameras, &network, seed)?;
+    let tally = score_pairs(&net, &tracked, &cams, p.network.correspondence.min_overlap)?;
     let aligned = align_cameras(&net, &cams)?;
     let bundle_rms_px = net
         .bundle
@@ -524,12 +186,10 @@ fn run_scene(p: &Params, noise_px: f64, rng: &mut ChaCha8Rng, seed: u64) -> Resu
 
 /// Every count, size and range a scenario file sets, before anything is drawn: a reversed
 /// range or an empty image would panic in the generator, a huge count would run for hours.
-fn check_params(p: &Params) -> Result<()> {
+/// The scene's own settings are checked by camnet ([`SceneConfig::check`]).
+fn check_params(p: &Params) -> Result<Scene> {
     let counts = [
         ("n_runs", p.n_runs, 1, 1000),
-        ("n_cameras", p.n_cameras, 3, 64),
-        ("n_people", p.n_people, 1, 1000),
-        ("n_frames", p.n_frames as usize, 2, 100_000),
         ("noise levels in noise_px", p.noise_px.len(), 1, 100),
     ];
     for (name, value, lo, hi) in counts {
@@ -538,39 +198,8 @@ fn check_params(p: &Params) -> Result<()> {
             "{name} = {value}; it must be in {lo}..={hi}"
         );
     }
-    let ranges = [
-        ("camera_height_m", p.camera_height_m),
-        ("person_height_m", p.person_height_m),
-    ];
-    for (name, [lo, hi]) in ranges {
-        anyhow::ensure!(
-            lo.is_finite() && hi.is_finite() && 0.0 < lo && lo < hi,
-            "{name} = [{lo}, {hi}]; it needs 0 < low < high"
-        );
-    }
-    for (name, side) in ["width", "height"].into_iter().zip(p.image_size) {
-        anyhow::ensure!(
-            (16.0..=16384.0).contains(&side),
-            "image_size's {name} is {side} px; it must be in [16, 16384]"
-        );
-    }
-    let positive = [
-        ("ring_radius_m", p.ring_radius_m),
-        ("focal_px", p.focal_px),
-        ("area_half_m", p.area_half_m),
-        ("speed_m_per_frame", p.speed_m_per_frame),
-        ("threshold_sigmas", p.threshold_sigmas),
-    ];
-    for (name, value) in positive {
-        tracker_model::ensure_positive(value, name)?;
-    }
-    tracker_model::ensure_in_range(
-        p.false_blobs_per_frame,
-        0.0,
-        1000.0,
-        "false_blobs_per_frame",
-    )?;
-    tracker_model::ensure_in_range(p.p_detect, 0.0, 1.0, "p_detect")?;
+    let scene = p.scene().check()?;
+    tracker_model::ensure_positive(p.threshold_sigmas, "threshold_sigmas")?;
     anyhow::ensure!(
         p.noise_px.iter().all(|s| s.is_finite() && *s >= 0.0),
         "noise_px must be finite and ≥ 0"
@@ -585,7 +214,7 @@ fn check_params(p: &Params) -> Result<()> {
         p.samples_per_scan,
         mcmcda::MAX_SAMPLES
     );
-    Ok(())
+    Ok(scene)
 }
 
 impl Pipeline for CamnetLocalisation {
@@ -593,7 +222,7 @@ impl Pipeline for CamnetLocalisation {
     type Output = Output;
 
     fn compute(p: &Params, rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Output> {
-        check_params(p)?;
+        let scene = check_params(p)?;
         let base = rng.clone();
         let tasks: Vec<(usize, f64)> = p
             .noise_px
@@ -608,7 +237,7 @@ impl Pipeline for CamnetLocalisation {
                 // level changes only the pixel noise drawn after it.
                 let mut rng = base.clone();
                 rng.set_stream(r as u64);
-                let out = run_scene(p, noise, &mut rng, env.seed.wrapping_add(r as u64));
+                let out = run_scene(p, &scene, noise, &mut rng, env.seed.wrapping_add(r as u64));
                 env.progress.advance(1);
                 out
             })

@@ -19,18 +19,15 @@
 
 use anyhow::Result;
 use eval_metrics::{Mae, mae, mmae};
+use gdt_bridge::scene::{ObservedGap, Scene, SceneConfig, cut_gaps, scene_window};
 use gdt_bridge::{
-    BSplineConfig, Baseline, GapCase, GcvConfig, GdtConfig, NoiseSearch, Observation, RecoveredGap,
-    WindowConfig, estimate_noise, gaps_from_mask, recover_baseline, recover_gdt,
-    recover_gdt_goal_state, window_cv_errors,
+    BSplineConfig, Baseline, GcvConfig, GdtConfig, NoiseSearch, Observation, RecoveredGap,
+    WindowConfig, estimate_noise, recover_baseline, recover_gdt, recover_gdt_goal_state,
 };
-use nalgebra::Vector2;
-use rand::{Rng, RngExt};
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 use rayon::prelude::*;
 use serde::Deserialize;
-use tracker_model::{Region2, Track, TrackId, TrackPoint, TrackSet, Vec2};
+use tracker_model::{Region2, Vec2};
 
 use crate::{
     Chart, Claim, Clock, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table,
@@ -76,50 +73,20 @@ pub struct Params {
     window_tuned: [usize; 2],
 }
 
-/// One walker: enters at a random time from a random border point, heads roughly across the
-/// scene, turns smoothly (an integrated random turn rate) and changes speed smoothly, until it
-/// leaves the image or the sequence ends.
-fn walker(p: &Params, id: u64, rng: &mut impl Rng) -> Result<Option<(Track, Track)>> {
-    let start = rng.random_range(0..p.n_frames / 2);
-    let (w, h) = (p.width, p.height);
-    let side = rng.random_range(0..4);
-    let along: f64 = rng.random();
-    let mut pos = match side {
-        0 => Vector2::new(along * w, 1.0),
-        1 => Vector2::new(along * w, h - 1.0),
-        2 => Vector2::new(1.0, along * h),
-        _ => Vector2::new(w - 1.0, along * h),
-    };
-    // Aim at a point near the centre so that many walkers cross the mask.
-    let target = Vector2::new(
-        w / 2.0 + rng.random_range(-0.25..0.25) * w,
-        h / 2.0 + rng.random_range(-0.25..0.25) * h,
-    );
-    let mut heading = (target.y - pos.y).atan2(target.x - pos.x);
-    let mut turn_rate = 0.0;
-    let mut speed = p.speed * rng.random_range(0.7..1.3);
-    let (mut truth, mut seen) = (Vec::new(), Vec::new());
-    for f in start..p.n_frames {
-        if !(0.0..=w).contains(&pos.x) || !(0.0..=h).contains(&pos.y) {
-            break;
+impl Params {
+    /// The simulated scene these parameters describe.
+    fn scene(&self) -> SceneConfig {
+        SceneConfig {
+            width: self.width,
+            height: self.height,
+            n_walkers: self.n_walkers,
+            n_frames: self.n_frames,
+            speed: self.speed,
+            turn_noise: self.turn_noise,
+            speed_noise: self.speed_noise,
+            detection_sigma: self.detection_sigma,
         }
-        truth.push(TrackPoint::at(f, pos));
-        let noise: Vector2<f64> = Vector2::from_fn(|_, _| StandardNormal.sample(rng));
-        seen.push(TrackPoint::at(f, pos + noise * p.detection_sigma));
-        let n: f64 = StandardNormal.sample(rng);
-        turn_rate = 0.9 * turn_rate + p.turn_noise * n;
-        heading += turn_rate;
-        let s: f64 = StandardNormal.sample(rng);
-        speed = (speed * (1.0 + p.speed_noise * s)).clamp(0.3 * p.speed, 2.0 * p.speed);
-        pos += Vector2::new(heading.cos(), heading.sin()) * speed;
     }
-    if truth.len() < 3 {
-        return Ok(None);
-    }
-    Ok(Some((
-        Track::from_points(TrackId(id), truth)?,
-        Track::from_points(TrackId(id), seen)?,
-    )))
 }
 
 /// The methods, in the order of the tables: (metric key, label, fair). A fair method sees only
@@ -178,9 +145,6 @@ fn method(key: &str) -> usize {
         .unwrap_or(usize::MAX)
 }
 
-/// A masked crossing with the noisy observations before and after it.
-type Case = (GapCase, Vec<Observation>, Vec<Observation>);
-
 /// One gap and how every method did on it.
 pub struct CaseResult {
     /// The scene it comes from.
@@ -231,44 +195,10 @@ pub struct Output {
     /// Per method, in the order of [`METHODS`].
     methods: Vec<MethodResult>,
     /// The longest gap with its observations and every method's recovery.
-    longest: (Case, Vec<RecoveredGap>),
+    longest: (ObservedGap, Vec<RecoveredGap>),
 }
 
 use crate::stats::mean_ci;
-
-/// The walkers' true and observed tracks, drawn in order from `rng`.
-fn simulate(p: &Params, rng: &mut impl Rng) -> Result<(TrackSet, TrackSet)> {
-    let (mut truth, mut seen) = (Vec::new(), Vec::new());
-    for id in 0..p.n_walkers as u64 {
-        if let Some((t, s)) = walker(p, id, rng)? {
-            truth.push(t);
-            seen.push(s);
-        }
-    }
-    Ok((TrackSet::from_tracks(truth)?, TrackSet::from_tracks(seen)?))
-}
-
-/// Gaps are cut from the truth; the methods see the noisy observations at the same frames.
-fn cut_gaps(truth: &TrackSet, seen: &TrackSet, mask: &Region2) -> Vec<Case> {
-    let observed = |c: &GapCase, side: &[Observation]| -> Vec<Observation> {
-        let track = seen.get(c.truth_id);
-        side.iter()
-            .filter_map(|o| {
-                track.and_then(|t| t.at(o.frame)).map(|q| Observation {
-                    frame: o.frame,
-                    position: q.location.position(),
-                })
-            })
-            .collect()
-    };
-    gaps_from_mask(truth, mask)
-        .into_iter()
-        .map(|c| {
-            let (b, a) = (observed(&c, &c.before), observed(&c, &c.after));
-            (c, b, a)
-        })
-        .collect()
-}
 
 /// Every method's recovery of one gap, its wall-clock microseconds, and the ML noise (r, q).
 type Recovered = (Vec<RecoveredGap>, Vec<f64>, (f64, f64));
@@ -276,10 +206,11 @@ type Recovered = (Vec<RecoveredGap>, Vec<f64>, (f64, f64));
 /// Recovers one gap with every method (in the order of [`METHODS`]), timing each.
 fn recover_all(
     p: &Params,
-    (_, a, b): &Case,
+    gap: &ObservedGap,
     scene_n: [usize; 2],
     clock: &dyn Clock,
 ) -> Result<Recovered> {
+    let (a, b) = (&gap.before, &gap.after);
     let fixed = |n: usize| WindowConfig {
         candidates: vec![n],
     };
@@ -340,18 +271,26 @@ type RunOut = (
     usize,
     usize,
     [usize; 2],
-    Vec<(Case, Vec<RecoveredGap>, Vec<f64>, (f64, f64))>,
+    Vec<(ObservedGap, Vec<RecoveredGap>, Vec<f64>, (f64, f64))>,
 );
 
-fn one_run(p: &Params, run: usize, rng: &mut ChaCha8Rng, clock: &dyn Clock) -> Result<RunOut> {
-    let (truth, seen) = simulate(p, rng)?;
+fn one_run(
+    p: &Params,
+    scene: &Scene,
+    run: usize,
+    rng: &mut ChaCha8Rng,
+    clock: &dyn Clock,
+) -> Result<RunOut> {
+    let (truth, seen) = scene.simulate(rng)?;
     let cases = cut_gaps(&truth, &seen, &p.mask);
     let n_all = cases.len();
     let [lo, hi] = p.gap_frames;
     // Each side needs two observations for the filters and three for the window B-spline.
-    let cases: Vec<Case> = cases
+    let cases: Vec<ObservedGap> = cases
         .into_iter()
-        .filter(|c| (lo..=hi).contains(&c.0.hidden.len()) && c.1.len() >= 3 && c.2.len() >= 3)
+        .filter(|c| {
+            (lo..=hi).contains(&c.case.hidden.len()) && c.before.len() >= 3 && c.after.len() >= 3
+        })
         .collect();
     // One window per scene: the candidate with the least cross-validation error summed over
     // the scene's gaps (observations only).
@@ -363,17 +302,8 @@ fn one_run(p: &Params, run: usize, rng: &mut ChaCha8Rng, clock: &dyn Clock) -> R
     .iter()
     .enumerate()
     {
-        let mut total = vec![0.0; p.window.candidates.len()];
-        for (_, a, b) in &cases {
-            for (t, e) in total.iter_mut().zip(window_cv_errors(a, b, method)?) {
-                *t += e.unwrap_or(f64::INFINITY);
-            }
-        }
-        let best = (0..total.len())
-            .filter(|&k| total[k].is_finite())
-            .min_by(|&i, &j| total[i].total_cmp(&total[j]));
-        scene_n[slot] = match best {
-            Some(k) => p.window.candidates[k],
+        scene_n[slot] = match scene_window(&cases, method)? {
+            Some(n) => n,
             None if cases.is_empty() => 0,
             None => anyhow::bail!("no window candidate fits every gap of scene {run}"),
         };
@@ -405,13 +335,14 @@ fn check_params(p: &Params) -> Result<()> {
 /// Every scene, in parallel: scene r on stream r of the scenario's generator, so the result
 /// does not depend on rayon's thread count; results come back in scene order.
 fn run_scenes(p: &Params, rng: &ChaCha8Rng, env: &Env<'_>) -> Result<Vec<RunOut>> {
+    let scene = p.scene().check()?;
     let base = rng.clone();
     (0..p.n_runs)
         .into_par_iter()
         .map(|r| {
             let mut rng = base.clone();
             rng.set_stream(r as u64);
-            let out = one_run(p, r, &mut rng, env.clock);
+            let out = one_run(p, &scene, r, &mut rng, env.clock);
             env.progress.advance(1);
             out
         })
@@ -427,7 +358,7 @@ struct Pooled {
     all_truth: Vec<Vec2>,
     all_est: Vec<Vec<Vec2>>,
     /// The longest gap (the first of that length) with every method's recovery.
-    longest: Option<(Case, Vec<RecoveredGap>)>,
+    longest: Option<(ObservedGap, Vec<RecoveredGap>)>,
     scene_windows: Vec<[usize; 2]>,
 }
 
@@ -451,7 +382,7 @@ fn pool_gaps(runs: Vec<RunOut>) -> Result<Pooled> {
             pooled.scene_windows.push(windows);
         }
         for (case, recovered, micros, noise) in gaps {
-            let truth: Vec<Vec2> = case.0.hidden.iter().map(|o| o.position).collect();
+            let truth: Vec<Vec2> = case.case.hidden.iter().map(|o| o.position).collect();
             let maes = recovered
                 .iter()
                 .map(|r| mae(&truth, &r.positions))
@@ -470,7 +401,7 @@ fn pool_gaps(runs: Vec<RunOut>) -> Result<Pooled> {
             if pooled
                 .longest
                 .as_ref()
-                .is_none_or(|(c, _)| c.0.hidden.len() < truth.len())
+                .is_none_or(|(c, _)| c.case.hidden.len() < truth.len())
             {
                 pooled.longest = Some((case, recovered));
             }
@@ -1036,7 +967,8 @@ const DRAWN: [&str; 5] = [
 
 /// The longest gap: x against frame with the goal-state GDT's ±2σ band.
 fn band_chart(out: &Output) -> Chart {
-    let ((case, before, after), recovered) = &out.longest;
+    let (gap, recovered) = &out.longest;
+    let (case, before, after) = (&gap.case, &gap.before, &gap.after);
     let frame_x = |obs: &[Observation]| {
         obs.iter()
             .map(|o| (f64::from(o.frame), o.position.x))
@@ -1099,7 +1031,8 @@ fn band_chart(out: &Output) -> Chart {
 
 /// The longest gap's path in the image, with the mask.
 fn path_chart(out: &Output) -> Chart {
-    let ((case, before, after), recovered) = &out.longest;
+    let (gap, recovered) = &out.longest;
+    let (case, before, after) = (&gap.case, &gap.before, &gap.after);
     let xy = |obs: &[Observation]| {
         obs.iter()
             .map(|o| (o.position.x, o.position.y))
