@@ -83,8 +83,9 @@ impl Default for FusedSettings {
 
 /// Tracks `rows` with SMC-PHD (the `[phd]` table of `settings`, scaled and fitted to the boxes
 /// as `--tracker phd` does, then [`fused_config`]) fused with image local detectors on the
-/// frames of `dir`. Track ids are the filter's labels. The filter draws from `seed`, the local
-/// detectors from a seed drawn from it.
+/// frames of `dir`. Tracks are made from the filter's labels by `--tracker phd`'s track
+/// manager (`[phd_labels]`), ids from 1. The filter draws from `seed`, the local detectors
+/// from a seed drawn from it.
 pub fn track_frames(
     dir: &Path,
     rows: &[MotRow],
