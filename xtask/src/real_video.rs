@@ -5,6 +5,7 @@
 //! `SpriteRenderer`). The page says which it ran on. There is no ground truth for `vtest.avi`,
 //! so identity switches, MOTA and IDF1 are against offline MCMCDA's output.
 
+use std::fmt::Write as _;
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -12,15 +13,16 @@ use anyhow::{Context, Result};
 use eval_metrics::{EvalConfig, MatchConfig, evaluate};
 use mot::frames::FusedSettings;
 use mot::track::{TrackConfig, TrackerKind, track_detections, track_detections_with_frames};
-use mot::video::{VideoDetectorConfig, detect_folder};
+use mot::video::{VideoDetectorConfig, detect_folder, write_overlay_frames};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use scenarios::{Table, fmt_num};
 use sensors_video::io::{FrameFolder, write_image};
 use sensors_video::{SpriteConfig, SpriteRenderer};
-use tracker_model::{BoundingBox, TrackSet};
+use tracker_model::{BoundingBox, Track, TrackSet};
 
 use crate::data;
+use crate::report::{html_escape, page, to_html, to_markdown};
 
 /// What the page shows: where the frames came from, the table, and overlay images (file name
 /// in the report folder, caption).
@@ -41,8 +43,50 @@ const TRACKERS: [(&str, Option<TrackerKind>); 4] = [
     ("PHD fused with image local detectors", None),
 ];
 
+/// The page's name, which `cargo xtask report --filter` matches.
+pub const FILTER: &str = "real-video";
+
+/// The real-video page (`real-video.html`, returned), its entry in the index and its
+/// Markdown.
+pub fn write_page(out_dir: &Path, index: &mut String, md: &mut String) -> Result<String> {
+    let title = "Real video: the camera pipeline and the trackers";
+    let video = run(out_dir)?;
+    let mut body = format!(
+        "<p><a href=\"index.html\">← report index</a></p>\n<h1>{t}</h1>\n<p>Ran on {s}. \
+         Detections: sensors-video's background mixture with shadows, cleaned, blobs of 300 px or \
+         more (<code>cargo xtask track --video</code>). No ground truth exists for these frames, \
+         so the scores are against offline MCMCDA's output, a pseudo-truth that favours trackers \
+         whose boxes are the blobs themselves (docs/image-detector.md).</p>\n",
+        t = html_escape(title),
+        s = html_escape(&video.source)
+    );
+    body += &to_html(&video.table);
+    let _ = write!(
+        md,
+        "# {title}\n\nRan on {}.\n\n{}\n",
+        video.source,
+        to_markdown(&video.table)
+    );
+    for (file, caption) in &video.overlays {
+        let _ = writeln!(
+            body,
+            "<figure><img src=\"{file}\" width=\"768\"><figcaption>{}</figcaption></figure>",
+            html_escape(caption)
+        );
+        let _ = writeln!(md, "![{caption}]({file})\n");
+    }
+    let _ = writeln!(
+        index,
+        "<li><a href=\"real-video.html\">{}</a></li>",
+        html_escape(title)
+    );
+    fs::write(out_dir.join("real-video.html"), page(title, &body))
+        .context("writing real-video.html")?;
+    Ok("real-video.html".to_string())
+}
+
 /// Runs the pipeline and writes the overlays into `out_dir`.
-pub fn run(out_dir: &Path) -> Result<RealVideo> {
+fn run(out_dir: &Path) -> Result<RealVideo> {
     run_with_cache(out_dir, &data::cache_dir()?)
 }
 
@@ -147,7 +191,7 @@ fn score_table(outputs: &[(&str, TrackSet)], detections: usize, frames: usize) -
         matching: MatchConfig::iou(0.5),
     };
     for (k, (name, set)) in outputs.iter().enumerate() {
-        let mut lengths: Vec<usize> = set.tracks().iter().map(|t| t.points().len()).collect();
+        let mut lengths: Vec<usize> = set.tracks().iter().map(Track::len).collect();
         lengths.sort_unstable();
         let n = lengths.len();
         let median = match n {
@@ -171,8 +215,8 @@ fn score_table(outputs: &[(&str, TrackSet)], detections: usize, frames: usize) -
     Ok(table)
 }
 
-/// Three frames (a quarter, a half and three quarters in) of each tracker in `outputs`,
-/// with its tracks drawn, as PNG files in `out_dir`.
+/// Three frames (a quarter, a half and three quarters in) of each tracker in `outputs`, with
+/// its tracks drawn, as PNG files in `out_dir/real-video-K/`.
 fn write_overlays(
     out_dir: &Path,
     folder: &FrameFolder,
@@ -182,20 +226,12 @@ fn write_overlays(
     let picks = [1, 2, 3].map(|q| frames[q * (frames.len() - 1) / 4]);
     let mut written = Vec::new();
     for (k, (name, set)) in outputs.iter().enumerate() {
-        let rows = set.to_mot_rows(0.0);
+        let sub = format!("real-video-{k}");
+        write_overlay_frames(folder, set, &out_dir.join(&sub), &picks, &mut |_| {})?;
         for frame in picks {
-            let boxes: Vec<(u64, BoundingBox)> = rows
-                .iter()
-                .filter(|r| r.frame == frame)
-                .map(|r| (r.id as u64, r.bbox))
-                .collect();
-            let drawn = sensors_video::overlay::draw_tracks(&folder.load(frame)?, &boxes)?;
-            let file = format!("real-video-{k}-{frame:06}.png");
-            write_image(&drawn, &out_dir.join(&file))?;
-            written.push((
-                file,
-                format!("{name}, frame {frame}: {} tracks", boxes.len()),
-            ));
+            let shown = set.tracks().iter().filter(|t| t.at(frame).is_some());
+            let caption = format!("{name}, frame {frame}: {} tracks", shown.count());
+            written.push((format!("{sub}/{frame:06}.png"), caption));
         }
     }
     Ok(written)

@@ -188,11 +188,7 @@ impl Request<'_> {
         let Some(dir) = self.folder() else {
             return Ok(None);
         };
-        let folder = FrameFolder::open(dir)?;
-        Ok(Some(match self.first_frame {
-            Some(first) => folder.renumbered(first)?,
-            None => folder,
-        }))
+        Ok(Some(FrameFolder::open_numbered(dir, self.first_frame)?))
     }
 }
 

@@ -19,24 +19,11 @@ use rand_chacha::ChaCha8Rng;
 use tracker_model::{ConstantVelocity2, Region2, SensorPose, Vec2, wrap_angle_rad};
 
 fn sensors() -> Vec<SensorNode> {
-    let mut out = Vec::new();
-    for (i, (x, y)) in [
-        (5.0, 4.0),
-        (17.5, 4.0),
-        (30.0, 4.0),
-        (5.0, 16.0),
-        (17.5, 16.0),
-        (30.0, 16.0),
-    ]
-    .into_iter()
-    .enumerate()
-    {
-        let pose = SensorPose {
-            position: Vec2::new(x, y),
-            heading_rad: 0.4 * i as f64,
-        };
-        out.push(SensorNode::audio(format!("a{i}"), pose, 36));
-    }
+    let mut out: Vec<SensorNode> = av_fusion::scene::audio_poses()
+        .into_iter()
+        .enumerate()
+        .map(|(i, pose)| SensorNode::audio(format!("a{i}"), pose, 36))
+        .collect();
     for (i, (x, y, h)) in [(1.0, 1.0, 35.0f64), (34.0, 1.0, 145.0), (8.0, 19.5, -55.0)]
         .into_iter()
         .enumerate()

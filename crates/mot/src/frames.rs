@@ -159,11 +159,7 @@ impl FusedPhd {
         seed: u64,
     ) -> Result<Self> {
         labels.check()?;
-        let folder = FrameFolder::open(dir)?;
-        let folder = match fused.first_frame {
-            Some(first) => folder.renumbered(first)?,
-            None => folder,
-        };
+        let folder = FrameFolder::open_numbered(dir, fused.first_frame)?;
         Ok(Self {
             folder,
             filter,

@@ -94,13 +94,26 @@ pub fn detect_folder(
     Ok(rows)
 }
 
-/// Draws `tracks` on every frame of `folder` that has a box and writes the frames as PNG to
-/// `out_dir` (created if missing), named by frame number; returns how many were written.
-/// Frames without a track are written too, undrawn, so the overlay plays as the video does.
+/// Draws `tracks` on every frame of `folder` and writes the frames as PNG to `out_dir`
+/// ([`write_overlay_frames`]); frames without a track are written too, undrawn, so the
+/// overlay plays as the video does.
 pub fn write_overlay(
     folder: &FrameFolder,
     tracks: &TrackSet,
     out_dir: &Path,
+    progress: &mut dyn FnMut(u32),
+) -> Result<usize> {
+    let all: Vec<u32> = folder.frames().collect();
+    write_overlay_frames(folder, tracks, out_dir, &all, progress)
+}
+
+/// Draws `tracks` on the given `frames` of `folder` and writes them as PNG to `out_dir`
+/// (created if missing), named by frame number; returns how many were written.
+pub fn write_overlay_frames(
+    folder: &FrameFolder,
+    tracks: &TrackSet,
+    out_dir: &Path,
+    frames: &[u32],
     progress: &mut dyn FnMut(u32),
 ) -> Result<usize> {
     std::fs::create_dir_all(out_dir).map_err(|error| sensors_video::Error::Io {
@@ -114,16 +127,14 @@ pub fn write_overlay(
             .or_default()
             .push((row.id as u64, row.bbox));
     }
-    let mut written = 0;
-    for frame in folder.frames() {
+    for &frame in frames {
         let image = folder.load(frame)?;
         let boxes = by_frame.get(&frame).map_or(&[][..], Vec::as_slice);
         let drawn = sensors_video::overlay::draw_tracks(&image, boxes)?;
         write_image(&drawn, &out_dir.join(format!("{frame:06}.png")))?;
-        written += 1;
         progress(frame);
     }
-    Ok(written)
+    Ok(frames.len())
 }
 
 #[cfg(test)]

@@ -234,6 +234,15 @@ impl FrameFolder {
         Ok(self)
     }
 
+    /// [`FrameFolder::open`], then [`FrameFolder::renumbered`] from `first` when given.
+    pub fn open_numbered(dir: &Path, first: Option<u32>) -> Result<Self> {
+        let folder = Self::open(dir)?;
+        match first {
+            Some(first) => folder.renumbered(first),
+            None => Ok(folder),
+        }
+    }
+
     /// The first frame number, if there is an image.
     pub fn first(&self) -> Option<u32> {
         self.frames.keys().next().copied()
