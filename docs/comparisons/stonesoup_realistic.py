@@ -70,9 +70,11 @@ from stonesoup.initiator.simple import MultiMeasurementInitiator
 from stonesoup.models.measurement.linear import LinearGaussian
 from stonesoup.models.transition.linear import CombinedLinearGaussianTransitionModel, ConstantVelocity
 from stonesoup.predictor.kalman import KalmanPredictor
+from stonesoup.smoother.kalman import KalmanSmoother
 from stonesoup.types.detection import Detection
 from stonesoup.types.multihypothesis import MultipleHypothesis
 from stonesoup.types.state import GaussianState
+from stonesoup.types.track import Track
 from stonesoup.types.update import Update
 from stonesoup.updater.kalman import KalmanUpdater
 from stonesoup.updater.probability import PDAUpdater
@@ -163,7 +165,7 @@ def run(by_frame, fps, kind, q, sigma, init, d_miss):
         tracks |= new
         all_tracks |= new
     per_frame = (time.perf_counter() - start) / n_frames
-    return all_tracks, per_frame
+    return all_tracks, per_frame, transition
 
 
 def detected(state, kind):
@@ -177,13 +179,18 @@ def detected(state, kind):
     return sum(float(x.probability) for x in h if x) > 0.5
 
 
-def write(tracks, fps, kind, path, offline):
+def write(tracks, fps, kind, path, mode, transition):
+    """One output of a run: `online` (every state), `offline` (without the coasted tail) or
+    `smoothed` (the offline states through Stone Soup's Rauch-Tung-Striebel smoother)."""
     rows = []
+    smoother = KalmanSmoother(transition_model=transition)
     for i, track in enumerate(sorted(tracks, key=lambda tr: tr.states[0].timestamp), start=1):
         states = list(track.states)
-        if offline:
+        if mode != "online":
             while states and not detected(states[-1], kind):
                 states.pop()
+        if mode == "smoothed" and len(states) > 1:
+            states = list(smoother.smooth(Track(states)).states)
         for s in states:
             frame = int(round((s.timestamp - T0).total_seconds() * fps)) + 1
             x = s.state_vector
@@ -200,15 +207,74 @@ def score(name, path):
     return d["clear"]["mota"], d["identity"]["idf1"], d["clear"]["id_switches"]
 
 
+MODES = ["online", "offline", "smoothed"]
+
+
 def evaluate(name, fps, kind, params):
     *model, threshold = params
-    tracks, per_frame = run(read_dets(name, threshold), fps, kind, *model)
+    tracks, per_frame, transition = run(read_dets(name, threshold), fps, kind, *model)
     result = {}
-    for mode in ["online", "offline"]:
+    for mode in MODES:
         path = os.path.join(DIR, f"{name}-ss-{kind}-{mode}.txt")
-        write(tracks, fps, kind, path, mode == "offline")
+        write(tracks, fps, kind, path, mode, transition)
         result[mode] = score(name, path)
     return result, per_frame
+
+
+# CHOSEN=1: the configurations the grid search above chose on the tuning sequences (recorded
+# 2026-11-29; (q, σ, (min_points, hold), d, threshold) for the online and offline outputs), so
+# that new sequences can be run without searching again. The smoothed output, added
+# 2026-12-02, is tuned here over q × σ on the same tuning sequences, with the offline choice's
+# initiation, deletion and threshold (as JPDA is above).
+CHOSEN = {
+    25.0: {("gnn", "online"): (3000.0, 2.0, (3, 2), 12, 0.4),
+           ("gnn", "offline"): (3000.0, 2.0, (3, 2), 12, 0.4),
+           ("jpda", "online"): (3000.0, 2.0, (3, 2), 12, 0.4),
+           ("jpda", "offline"): (3000.0, 2.0, (3, 2), 12, 0.4)},
+    10.0: {("gnn", "online"): (3000.0, 2.0, (3, 2), 8, 0.4),
+           ("gnn", "offline"): (1000.0, 2.0, (3, 2), 12, None),
+           ("jpda", "online"): (1000.0, 4.0, (3, 2), 12, None),
+           ("jpda", "offline"): (1000.0, 2.0, (3, 2), 12, None)},
+}
+# CHOSEN=1 runs these sequences (comma-separated NAMEs, each NAME-det.txt in DIR; the frame
+# rate is read from the name's prefix, r25-/f25-/t25- or r10-/f10-/t10-).
+SEQUENCES = os.environ.get("SEQUENCES", "")
+
+
+def tune_smoothed(fps, group, kind):
+    """The smoothed output's q × σ by mean MOTA over the tuning sequences."""
+    rest = CHOSEN[fps][(kind, "offline")][2:]
+    best = None
+    for q, sigma in itertools.product(Q_GRID, SIGMA_GRID):
+        params = (q, sigma) + rest
+        mota = float(np.mean([evaluate(n, fps, kind, params)[0]["smoothed"][0]
+                              for n in group["tuning"]]))
+        print(f"tune {fps} {kind} smoothed {params}: {mota:.4f}", flush=True)
+        if best is None or mota > best[0]:
+            best = (mota, params)
+    return best[1]
+
+
+def run_chosen():
+    """Each chosen configuration, and the smoothed output's, on SEQUENCES."""
+    summary = {}
+    for fps, group in GROUPS.items():
+        names = [n for n in SEQUENCES.split(",") if n and n[1:3] == str(int(fps))]
+        if not names or (ONLY_FPS is not None and float(ONLY_FPS) != fps):
+            continue
+        for kind in ["gnn", "jpda"]:
+            chosen = dict(CHOSEN[fps])
+            chosen[(kind, "smoothed")] = tune_smoothed(fps, group, kind)
+            for mode in MODES:
+                params = chosen[(kind, mode)]
+                for name in names:
+                    res, per_frame = evaluate(name, fps, kind, params)
+                    mota, idf1, idsw = res[mode]
+                    summary[(name, kind, mode)] = (mota, idf1, idsw, per_frame)
+                    print(f"RESULT {name} {kind} {mode} params={params} MOTA={mota:.4f} "
+                          f"IDF1={idf1:.4f} IDSW={idsw} ms_per_frame={1e3 * per_frame:.3f}",
+                          flush=True)
+    print(json.dumps({" ".join(k): v for k, v in summary.items()}, indent=1))
 
 
 def main():
@@ -246,4 +312,4 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    run_chosen() if os.environ.get("CHOSEN") == "1" else main()

@@ -77,9 +77,18 @@ pub fn run(determinism_only: bool) -> Outcome {
     }
     eprintln!("==> determinism: the tracker CLIs and a few scenarios at 1 and 2 threads");
     determinism()?;
+    for name in TUNED_SCENARIOS {
+        // At one thread: the committed files were written at two, so this also shows the
+        // search does not depend on the thread count.
+        eprintln!("==> tuning: xtask tune {name} --check, at 1 thread");
+        xtask_at("1", &["tune", name, "--check"], true)?;
+    }
     eprintln!("==> scenarios");
     scenario::run_suite(None, false, None, None)
 }
+
+/// The scenarios whose settings file `cargo xtask tune NAME --check` must reproduce.
+const TUNED_SCENARIOS: [&str; 1] = ["mot-realistic"];
 
 /// The scenarios the determinism step runs (name filters): fast ones that use rayon.
 const DETERMINISM_SCENARIOS: [&str; 3] = ["kalman", "simulator", "mot-track"];

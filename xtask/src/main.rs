@@ -10,6 +10,7 @@ use std::process::ExitCode;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+mod appendix;
 mod ci;
 mod data;
 mod eval;
@@ -21,6 +22,7 @@ mod report;
 mod scenario;
 mod screenshot;
 mod track;
+mod tune;
 
 /// Workspace tasks for the tracking toolkit.
 #[derive(Parser)]
@@ -106,6 +108,15 @@ enum Command {
         /// The data set: vtest.
         name: String,
     },
+    /// Re-run the tuning search of a scenario on its tuning seeds and write the settings file
+    /// it reads (fixtures/tuned/NAME.toml) with every candidate's score (NAME-grid.csv).
+    Tune {
+        /// The scenario (file stem), e.g. mot-realistic.
+        name: String,
+        /// Compare with the committed files instead of writing them (exit 1 on a difference).
+        #[arg(long)]
+        check: bool,
+    },
     /// Score a tracker's MOTChallenge output against MOTChallenge ground truth.
     Eval {
         /// Ground truth (frame,id,left,top,width,height,conf,...); rows with conf 0 are ignored.
@@ -154,6 +165,7 @@ fn main() -> ExitCode {
         Command::Fuzz { seconds, filter } => fuzz::run(seconds, filter.as_deref()),
         Command::Track(args) => track::run(&args.request()),
         Command::FetchData { name } => data::run(&name),
+        Command::Tune { name, check } => tune::run(&name, check),
         Command::Walkers {
             seed,
             fps,

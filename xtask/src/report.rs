@@ -11,7 +11,7 @@ use anyhow::Context;
 use scenarios::Table;
 
 use crate::scenario::{self, RunResult, Verdict};
-use crate::{Outcome, plot, real_video, screenshot};
+use crate::{Outcome, appendix, plot, real_video, screenshot};
 
 /// A table as Markdown (also readable as plain text on a terminal).
 pub fn to_markdown(table: &Table) -> String {
@@ -346,6 +346,7 @@ fn write(
     if with_real_video {
         pages.push(real_video::write_page(out_dir, &mut index, &mut md)?);
     }
+    pages.extend(appendix::write_page(out_dir, results, &mut index, &mut md)?);
     index += "</ul>\n";
     if !headlines.is_empty() {
         index += "<h2>Headline results</h2>\n";

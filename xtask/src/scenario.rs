@@ -49,7 +49,7 @@ impl Clock for WallClock {
 }
 
 /// Input files named in scenario files are relative to the workspace root.
-struct WorkspaceFiles;
+pub struct WorkspaceFiles;
 
 impl Inputs for WorkspaceFiles {
     fn read_to_string(&self, path: &str) -> Result<String> {
@@ -348,7 +348,7 @@ pub fn run_suite(
 }
 
 /// Developer options from the environment variables of their names; their text to stderr.
-struct Terminal;
+pub struct Terminal;
 
 impl scenarios::Developer for Terminal {
     fn option(&self, name: &str) -> Option<String> {

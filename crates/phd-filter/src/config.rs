@@ -199,9 +199,7 @@ impl PhdConfig {
     /// and sizes, p_D = 0.8 (public detectors miss far more than Yoon et al.'s 5 %; a lower
     /// p_D keeps a track through a missed detection), 300 particles per target and 100 per
     /// newborn group, and an extraction threshold of 0.3 (with p_D ≈ 0.8, a target's W(z)
-    /// after a miss or beside a neighbour often sits between 0.3 and 0.5; on the tuning
-    /// sequences of the scenarios crate's `mot-realistic`, 0.3 gave mean MOTA 0.875 against
-    /// 0.5's 0.863, 0.4 0.870, 0.25 0.875 with a lower IDF1, 0.2 0.873).
+    /// after a miss or beside a neighbour often sits between 0.3 and 0.5).
     ///
     /// ```
     /// use phd_filter::PhdConfig;

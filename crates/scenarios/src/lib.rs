@@ -49,7 +49,9 @@ use serde::de::DeserializeOwned;
 
 mod pipelines;
 mod report;
+pub mod seeds;
 mod stats;
+pub mod tune;
 
 pub use report::{
     Axes, BAR_WIDTH, Chart, Figure, Section, Series, Style, Table, YAxis, fill, fmt_num,
@@ -188,6 +190,13 @@ pub trait Pipeline {
     fn headlines(output: &Self::Output) -> Vec<Headline> {
         let _ = output;
         Vec::new()
+    }
+
+    /// Re-runs the searches behind the scenario's settings on its tuning seeds (`cargo xtask
+    /// tune NAME`); `None` for a pipeline with nothing tuned.
+    fn tune(params: &Self::Params, env: &Env<'_>) -> Result<Option<tune::Tuned>> {
+        let _ = (params, env);
+        Ok(None)
     }
 }
 
@@ -342,6 +351,52 @@ fn run_typed<P: Pipeline>(params: &toml::Table, seed: u64, env: &Env<'_>) -> Res
         claims,
         headlines: P::headlines(&output),
     })
+}
+
+type TuneFn = fn(&toml::Table, u64, &Env<'_>) -> Result<Option<tune::Tuned>>;
+
+fn tune_typed<P: Pipeline>(
+    params: &toml::Table,
+    seed: u64,
+    env: &Env<'_>,
+) -> Result<Option<tune::Tuned>> {
+    check_params(params)?;
+    let params: P::Params = toml::Value::Table(params.clone())
+        .try_into()
+        .context("bad [params]")?;
+    P::tune(&params, &Env { seed, ..*env })
+}
+
+/// The pipelines whose settings come from a tuning search (`cargo xtask tune`).
+const TUNERS: &[(&str, TuneFn)] = &[(
+    "mot-realistic",
+    tune_typed::<pipelines::mot_realistic::MotRealistic>,
+)];
+
+/// Re-runs the tuning searches of pipeline `name` on `params` (its tuning seeds only): the
+/// settings file and the grid of every scored candidate. An error for a pipeline that tunes
+/// nothing.
+pub fn tune_pipeline(
+    name: &str,
+    params: &toml::Table,
+    seed: u64,
+    env: &Env<'_>,
+) -> Result<tune::Tuned> {
+    let tune = TUNERS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, f)| *f)
+        .ok_or_else(|| {
+            anyhow!(
+                "pipeline {name:?} has no tuning search; tunable: {}",
+                TUNERS
+                    .iter()
+                    .map(|(n, _)| *n)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })?;
+    tune(params, seed, env)?.ok_or_else(|| anyhow!("pipeline {name:?} returned no settings"))
 }
 
 /// Every pipeline by the name a scenario file gives it.

@@ -53,9 +53,92 @@ impl MeanCi {
     }
 }
 
+/// Student's t quantile t₀.₉₇₅(ν) for ν degrees of freedom: the published table for ν ≤ 30,
+/// Cornish–Fisher's expansion about the normal quantile beyond (within 1e-3 there).
+pub(crate) fn t_975(dof: usize) -> f64 {
+    const TABLE: [f64; 30] = [
+        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
+        2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
+        2.052, 2.048, 2.045, 2.042,
+    ];
+    match dof {
+        0 => f64::NAN,
+        1..=30 => TABLE[dof - 1],
+        _ => {
+            let (z, v) = (1.959_964_f64, dof as f64);
+            z + (z.powi(3) + z) / (4.0 * v)
+                + (5.0 * z.powi(5) + 16.0 * z.powi(3) + 3.0 * z) / (96.0 * v * v)
+        }
+    }
+}
+
+/// A paired comparison: the mean of the per-case differences (ours − theirs) and its 95 %
+/// Student-t interval, `mean ± t₀.₉₇₅(n − 1)·s/√n`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Paired {
+    /// Mean difference.
+    pub(crate) mean: f64,
+    /// Lower and upper ends of the 95 % interval.
+    pub(crate) low: f64,
+    pub(crate) high: f64,
+}
+
+impl Paired {
+    /// The interval of `ours[i] − theirs[i]`; NaN ends with fewer than two pairs.
+    pub(crate) fn of(ours: &[f64], theirs: &[f64]) -> Self {
+        let diffs: Vec<f64> = ours.iter().zip(theirs).map(|(a, b)| a - b).collect();
+        let n = diffs.len();
+        let mean = diffs.iter().sum::<f64>() / n as f64;
+        if n < 2 || ours.len() != theirs.len() {
+            return Self {
+                mean,
+                low: f64::NAN,
+                high: f64::NAN,
+            };
+        }
+        let var = diffs.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / (n as f64 - 1.0);
+        let half = t_975(n - 1) * (var / n as f64).sqrt();
+        Self {
+            mean,
+            low: mean - half,
+            high: mean + half,
+        }
+    }
+
+    /// "mean [low, high]".
+    pub(crate) fn show(&self) -> String {
+        format!(
+            "{} [{}, {}]",
+            crate::fmt_num(self.mean),
+            crate::fmt_num(self.low),
+            crate::fmt_num(self.high)
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use super::mean_ci;
+    use super::{Paired, mean_ci, t_975};
+
+    #[test]
+    fn t_quantiles_match_the_published_table() {
+        // t₀.₉₇₅ for ν = 7, 40, 60, 120 from the standard tables: 2.365, 2.021, 2.000, 1.980.
+        assert!((t_975(7) - 2.365).abs() < 1e-12);
+        for (dof, table) in [(40, 2.021), (60, 2.000), (120, 1.980)] {
+            assert!((t_975(dof) - table).abs() < 1e-3, "{dof}: {}", t_975(dof));
+        }
+        assert!(t_975(0).is_nan());
+    }
+
+    #[test]
+    fn paired_interval_by_hand() {
+        // Differences 1, 2, 3, 6: mean 3, s² = 14/3, half-width 3.182·√(14/3)/2.
+        let p = Paired::of(&[2.0, 4.0, 6.0, 10.0], &[1.0, 2.0, 3.0, 4.0]);
+        let half = 3.182 * (14.0f64 / 3.0).sqrt() / 2.0;
+        assert!((p.mean - 3.0).abs() < 1e-12);
+        assert!((p.low - (3.0 - half)).abs() < 1e-12 && (p.high - (3.0 + half)).abs() < 1e-12);
+        assert!(Paired::of(&[1.0], &[0.0]).low.is_nan());
+    }
 
     #[test]
     fn interval_by_hand() {

@@ -119,7 +119,7 @@ pub fn fit_model(base: &McmcdaConfig, rows: &[MotRow], fit: &FitConfig) -> Resul
         config.clutter_per_scan = clutter.clamp(0.01, 1e3);
         config.births_per_scan = (confident.len() as f64 / n_frames).clamp(1e-3, 1e2);
         config.p_disappear = (confident.len() as f64 / moments.n_span).clamp(1e-4, 0.5);
-        if !moments.fit_noise_and_speed(&mut config)? {
+        if !moments.fit_noise_and_speed(&mut config, fit)? {
             break;
         }
     }
@@ -205,7 +205,8 @@ impl Moments {
 
     /// R, q, the newborn velocity variance, v̄ and d̄ from the sums (see [`fit_model`]);
     /// `false` when there is no box to scale them by (the fit stops).
-    fn fit_noise_and_speed(&mut self, config: &mut McmcdaConfig) -> Result<bool> {
+    fn fit_noise_and_speed(&mut self, config: &mut McmcdaConfig, fit: &FitConfig) -> Result<bool> {
+        let inflation = fit.noise_inflation;
         // The noise grows with the box: the relative moments are turned into pixels at a
         // large box (the 90th percentile of widths and heights), so that gates hold for the
         // nearest people.
@@ -228,13 +229,13 @@ impl Moments {
                 q[k] = ((b - a) / 4.5).max(1e-3 * a.max(1e-9));
                 r[k] = ((a - 0.5 * q[k]) / 6.0).max(1e-2 * a.max(1e-9));
             }
-            let q_px = (q[0] * scale[0] + q[1] * scale[1]) / 2.0 * NOISE_INFLATION;
+            let q_px = (q[0] * scale[0] + q[1] * scale[1]) / 2.0 * inflation;
             config.motion = ConstantVelocity2::mcmcda(config.motion.dt_s(), q_px)?;
             config.measurement_noise = nalgebra::Matrix2::new(
-                r[0] * scale[0] * NOISE_INFLATION,
+                r[0] * scale[0] * inflation,
                 0.0,
                 0.0,
-                r[1] * scale[1] * NOISE_INFLATION,
+                r[1] * scale[1] * inflation,
             );
             let vv = (0..2)
                 .map(|k| (vel[k] / n1 - r[k] / 2.0).max(r[k]) * scale[k])
@@ -248,27 +249,17 @@ impl Moments {
         if let Some(p99) = percentile(&mut self.speeds.clone(), 99) {
             config.max_speed = config.max_speed.max(1.5 * p99 * w90);
         }
-        // A track may bridge the frames in which its target moves about `GAP_BOX_WIDTHS` box
+        // A track may bridge the frames in which its target moves about `gap_box_widths` box
         // widths (an occlusion by a passer-by lasts about that long).
         if let Some(p50) = percentile(&mut self.speeds, 50) {
-            let frames = (GAP_BOX_WIDTHS / p50.max(1e-3)).round().clamp(3.0, 30.0);
+            let frames = (fit.gap_box_widths / p50.max(1e-3))
+                .round()
+                .clamp(3.0, 30.0);
             config.max_gap = frames as u32;
         }
         Ok(true)
     }
 }
-
-/// How much the fitted R and q are widened over the moment estimates: the detections' errors
-/// are heavier-tailed than Gaussian (turns, stops, boxes cut at the border), and a gate sized
-/// to the mean square splits tracks. Chosen on the tuning sequences of `mot-realistic`.
-pub(super) const NOISE_INFLATION: f64 = 2.0;
-
-/// MCMCDA's d̄ is the frames in which a walker moves this many box widths: occlusions by a
-/// passer-by last about that long, and MCMCDA, which weighs every association against the
-/// whole window, bridges them (1 and 1.5 fragmented tracks, 2.5 gained nothing on the tuning
-/// sequences of `mot-realistic`). GNN, which commits scan by scan, deletes a track after half
-/// of it (one box width) unless `[gnn] max_gap` is set.
-pub(super) const GAP_BOX_WIDTHS: f64 = 2.0;
 
 /// The score densities of the file (the amplitude-feature likelihood of Lerro & Bar-Shalom
 /// 1993, IEEE AES 29(2), with the detector's confidence as the feature): GNN (`gnn`) tracks

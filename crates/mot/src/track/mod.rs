@@ -42,7 +42,7 @@ mod phd;
 
 use association::track_points;
 use boxes::{detection_boxes, kernel_reach};
-use fit::{Detections, GAP_BOX_WIDTHS, centres, detections_by_frame, problem_of, score_ratios};
+use fit::{Detections, centres, detections_by_frame, problem_of, score_ratios};
 pub(crate) use phd::Labeller;
 use phd::{MAX_COAST_FRAMES, track_boxes_phd};
 
@@ -134,8 +134,8 @@ impl Default for OfflineConfig {
             samples_per_detection: 20,
             min_samples: 20_000,
             chains: 2,
-            // Chosen on the tuning sequences of `mot-realistic` (0.5: little linked; 1, 1.5
-            // and 2 alike, 1.5 best; 3 links passers-by).
+            // 0.5 links little and 3 links passers-by; the tuned value for pedestrian files is
+            // in fixtures/tuned/mot-realistic.toml.
             link_gap_factor: 1.5,
         }
     }
@@ -149,13 +149,27 @@ pub struct FitConfig {
     pub iterations: usize,
     /// Detections a GNN track needs to count as confident.
     pub min_track_detections: usize,
+    /// How much the fitted R and q are widened over the moment estimates: the detections'
+    /// errors are heavier-tailed than Gaussian (turns, stops, boxes cut at the border), and a
+    /// gate sized to the mean square splits tracks.
+    pub noise_inflation: f64,
+    /// MCMCDA's d̄ is the frames in which a walker moves this many box widths: occlusions by a
+    /// passer-by last about that long, and MCMCDA, which weighs every association against the
+    /// whole window, bridges them. GNN, which commits scan by scan, deletes a track after half
+    /// of it (one box width at the default) unless `[gnn] max_gap` is set.
+    pub gap_box_widths: f64,
 }
 
 impl Default for FitConfig {
+    /// General defaults. The values `cargo xtask tune mot-realistic` chose for realistic
+    /// pedestrian files, with every candidate's score, are `fixtures/tuned/mot-realistic.toml`
+    /// and its grid (a `--config` file).
     fn default() -> Self {
         Self {
             iterations: 2,
             min_track_detections: 6,
+            noise_inflation: 2.0,
+            gap_box_widths: 2.0,
         }
     }
 }
@@ -178,8 +192,8 @@ impl Default for BoxConfig {
         Self {
             smoothing_frames: 1.5,
             extrapolate_frames: 0,
-            // On the tuning sequences of `mot-realistic` (mean MOTA): 1 → 0.829, 3 → 0.851,
-            // 5 → 0.842, the whole deletion gap (7-12 frames) → 0.818.
+            // A few frames bridge a missed detection; the whole deletion gap outputs people
+            // who left (fixtures/tuned/mot-realistic.toml has the tuned value).
             online_coast_frames: 3,
         }
     }
@@ -251,18 +265,16 @@ pub struct ScoreModel {
 /// The online MCMCDA tracker's settings for detection files: the crate's defaults, except
 /// that
 /// - a track is output from the prediction for up to 5 frames after its last detection (2,
-///   the crate's default, drops people through short occlusions; 5 and 8 did alike, 12
-///   worse, on the tuning sequences of `mot-realistic`);
+///   the crate's default, drops people through short occlusions);
 /// - each window runs two chains of 1,000 samples in parallel instead of one of 2,000, and
-///   no sample is drawn at a frame whose every detection extends the only track gating it
-///   (on the tuning sequences, tracker seeds 0-2, mean MOTA / IDF1 0.860 / 0.722 against the
-///   single chain's 0.860 / 0.717);
+///   no sample is drawn at a frame whose every detection extends the only track gating it;
 /// - a frame counts as ambiguous only for a rival at least e⁻⁴ as likely as the best
 ///   association (`rival_log_ratio` = 4) or for an ungated detection with a free one in its
-///   neighbourhood in the last two frames (`birth_lookback` = 2): the fastest setting within
-///   0.002 MOTA of counting everything on the tuning sequences (0.859 / 0.733). With the
-///   sampler's bounded rejection it takes 0.11-0.19 ms per frame on the reported sequences
-///   (docs/mot-realistic.md).
+///   neighbourhood in the last two frames (`birth_lookback` = 2). With the sampler's bounded
+///   rejection it takes 0.11-0.19 ms per frame on the realistic pedestrian files.
+///
+/// The values `cargo xtask tune mot-realistic` chose for those files, with every candidate's
+/// score, are `fixtures/tuned/mot-realistic.toml` and its grid.
 fn online_base() -> OnlineConfig {
     OnlineConfig {
         coast_scans: 5,
@@ -476,7 +488,8 @@ impl TrackConfig {
         if gnn.max_gap.is_none() && self.fit.iterations > 0 && !boxes.is_empty() {
             // GNN deletes after one box width of travel, half of MCMCDA's d̄ (the fitted one,
             // or the user's `[model] max_gap`).
-            gnn.max_gap = Some(((f64::from(model.max_gap) / GAP_BOX_WIDTHS).round() as u32).max(1));
+            gnn.max_gap =
+                Some(((f64::from(model.max_gap) / self.fit.gap_box_widths).round() as u32).max(1));
         }
         let score_model = if with_scores {
             fit_scores(&model, rows, &self.fit, &gnn, &self.scores)?
@@ -767,6 +780,16 @@ const KEY_COMMENTS: [(&str, &[(&str, &str)]); 9] = [
                 "min_track_detections",
                 "detections a GNN track needs to enter the fit",
             ),
+            (
+                "noise_inflation",
+                "factor on the fitted R and q (the detections' errors are heavier-tailed than \
+                 Gaussian)",
+            ),
+            (
+                "gap_box_widths",
+                "MCMCDA's largest gap d̄ = the frames a walker takes to move this many box \
+                 widths (GNN's: half of it)",
+            ),
         ],
     ),
     (
@@ -996,6 +1019,15 @@ pub fn render_config(config: &EffectiveConfig, tracker: Option<TrackerKind>) -> 
 /// in two or three.
 pub const MAX_FIT_ITERATIONS: usize = 20;
 
+/// `[fit] noise_inflation` range: below 1/10 the gates would hold no detection, above 100 every
+/// detection of the frame would fall in every gate.
+const MIN_NOISE_INFLATION: f64 = 0.1;
+const MAX_NOISE_INFLATION: f64 = 100.0;
+
+/// `[fit] gap_box_widths` range (d̄ is clamped to 3–30 frames whatever it is).
+const MIN_GAP_BOX_WIDTHS: f64 = 0.1;
+const MAX_GAP_BOX_WIDTHS: f64 = 100.0;
+
 impl FitConfig {
     /// Checks the rounds (at most [`MAX_FIT_ITERATIONS`]) and the confident-track length (≥ 3,
     /// the fewest detections the moment estimates can use).
@@ -1015,6 +1047,18 @@ impl FitConfig {
                 ),
             ));
         }
+        tracker_model::ensure_in_range(
+            self.noise_inflation,
+            MIN_NOISE_INFLATION,
+            MAX_NOISE_INFLATION,
+            "noise_inflation",
+        )?;
+        tracker_model::ensure_in_range(
+            self.gap_box_widths,
+            MIN_GAP_BOX_WIDTHS,
+            MAX_GAP_BOX_WIDTHS,
+            "gap_box_widths",
+        )?;
         Ok(())
     }
 }

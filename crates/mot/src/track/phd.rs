@@ -43,12 +43,9 @@ pub struct PhdLabelConfig {
 
 impl Default for PhdLabelConfig {
     fn default() -> Self {
-        // Chosen on the tuning sequences of `mot-realistic` (mean MOTA / IDF1 there), where
-        // the PHD path lost to online MCMCDA mainly by misses (FN), not false boxes: from
-        // 3 hits, IoU 0.3, mass 0.1 and 8 frames (0.800 / 0.622), coasting 15 frames gave
-        // 0.825 / 0.683, 40 with 2 hits and mass 0.02 0.842 / 0.771 (80 the same: tracks end
-        // by their label's mass before), IoU 0.2 then 0.843 / 0.808 (0.1, tried with an
-        // extraction threshold of 0.3 only: MOTA alike, IDF1 higher).
+        // General defaults: coast long (40 frames) and confirm on 2 hits, since the PHD path
+        // loses mainly by misses on pedestrian files. The values `cargo xtask tune
+        // mot-realistic` chose are fixtures/tuned/mot-realistic.toml.
         Self {
             confirm_hits: 2,
             confirm_window: 5,

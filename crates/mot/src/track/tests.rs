@@ -1,4 +1,3 @@
-use super::fit::NOISE_INFLATION;
 use super::*;
 
 /// Two walkers seen in frames 1-20, then again four billion frames later.
@@ -785,7 +784,7 @@ fn the_fit_recovers_the_simulated_model() {
     );
     // R and q are widened by NOISE_INFLATION.
     for k in 0..2 {
-        let r = fitted.measurement_noise[(k, k)] / NOISE_INFLATION;
+        let r = fitted.measurement_noise[(k, k)] / FitConfig::default().noise_inflation;
         assert!((r - sr * sr).abs() < 0.3 * sr * sr, "R[{k}] = {r}");
     }
     let tracker_model::CvNoise::Discrete {
@@ -794,7 +793,7 @@ fn the_fit_recovers_the_simulated_model() {
     else {
         panic!("not the discrete noise");
     };
-    let q = acceleration_covariance[(0, 0)] / NOISE_INFLATION;
+    let q = acceleration_covariance[(0, 0)] / FitConfig::default().noise_inflation;
     assert!((q - sq * sq).abs() < 0.6 * sq * sq, "q = {q}");
 }
 

@@ -10,6 +10,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use crate::Developer;
+use crate::seeds::check_disjoint;
 
 /// `AV_FUSION_TUNE=1`: the single-vehicle grid search of `[params.tuning]`
 /// (`av_fusion::tuning::tune`), each line as it is measured and then the whole table.
@@ -31,8 +32,14 @@ const TUNE_MULTI_ENV: &str = "AV_FUSION_TUNE_MULTI";
 const DIAG_ENV: &str = "AV_FUSION_DIAG";
 
 /// Runs the developer tools the developer asked for, in the order above, before the
-/// reported runs (which they do not change).
-pub(super) fn run_tools(dev: &dyn Developer, p: &Params, runs: &[RunSpec]) -> Result<()> {
+/// reported runs (which they do not change). The diagnostics refuse the reported `seed`, as
+/// the searches' seed lists are refused by `av_fusion::scene::check_params`.
+pub(super) fn run_tools(
+    dev: &dyn Developer,
+    p: &Params,
+    runs: &[RunSpec],
+    seed: u64,
+) -> Result<()> {
     let log = |text: &str| dev.say(text);
     if dev.option(TUNE_ENV).is_some() {
         let table = tuning::tune(p, runs, &seeded(&p.tuning.seeds), &log)?;
@@ -51,6 +58,7 @@ pub(super) fn run_tools(dev: &dyn Developer, p: &Params, runs: &[RunSpec]) -> Re
             .split(',')
             .filter_map(|s| s.trim().parse().ok())
             .collect();
+        check_disjoint(&[("diagnostic", &seeds), ("reported", &[seed])])?;
         tuning::diagnose(p, runs, &seeded(&seeds), &log)?;
     }
     Ok(())

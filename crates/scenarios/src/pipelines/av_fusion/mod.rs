@@ -259,7 +259,7 @@ impl Pipeline for AvFusion {
     fn compute(p: &Params, rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Output> {
         check_params(p, env.seed)?;
         let runs = run_specs(p)?;
-        developer::run_tools(env.developer, p, &runs)?;
+        developer::run_tools(env.developer, p, &runs, env.seed)?;
         env.progress.set_length(runs.len() as u64);
         let base = rng.clone();
         let n_passes = p.passes.len();

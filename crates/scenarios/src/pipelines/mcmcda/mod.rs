@@ -291,6 +291,7 @@ fn tune(
     tuning: &Tuning,
 ) -> Result<Vec<Vec<Tuned>>> {
     anyhow::ensure!(tuning.runs > 0, "tuning.runs must be positive");
+    crate::seeds::check_disjoint(&[("tuning", &[tuning.seed]), ("reported", &[env.seed])])?;
     let candidates = tuning.candidates(&trackers.gnn);
     anyhow::ensure!(!candidates.is_empty(), "no GNN candidates to tune");
     let base = ChaCha8Rng::seed_from_u64(tuning.seed);
