@@ -11,6 +11,14 @@
 #     for s in 103 104; do cargo xtask walkers --seed $s --fps 10 --seconds 24 --out $D/t10-$s; done
 #     SCORE_GRID=none,0.4,0.5 /tmp/ss/bin/python docs/comparisons/stonesoup_realistic.py $D
 #
+# The rows of 2026-12-02 (the smoothed output, and the fresh sequences 201-208 of issue #32)
+# came from the configurations chosen above (CHOSEN below) without searching again:
+#
+#     for s in 201 202 203 204; do cargo xtask walkers --seed $s --fps 25 --seconds 16 --out $D/f25-$s; done
+#     for s in 205 206 207 208; do cargo xtask walkers --seed $s --fps 10 --seconds 24 --out $D/f10-$s; done
+#     CHOSEN=1 SEQUENCES=r25-1,r25-2,r10-3,r10-4,f25-201,f25-202,f25-203,f25-204,f10-205,f10-206,f10-207,f10-208 \
+#         /tmp/ss/bin/python docs/comparisons/stonesoup_realistic.py $D
+#
 # The script generates nothing: it reads NAME-det.txt, writes its tracks to NAME-ss-TRACKER.txt
 # next to them and scores them with `cargo xtask eval --json` against NAME-gt.txt.
 #
