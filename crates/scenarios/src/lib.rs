@@ -321,11 +321,16 @@ pub fn check_params(params: &toml::Table) -> Result<()> {
 
 type RunFn = fn(&toml::Table, u64, &Env<'_>) -> Result<Run>;
 
-fn run_typed<P: Pipeline>(params: &toml::Table, seed: u64, env: &Env<'_>) -> Result<Run> {
+/// The checks every pipeline's parameters get, then the parameters as the pipeline's type.
+fn typed_params<P: Pipeline>(params: &toml::Table) -> Result<P::Params> {
     check_params(params)?;
-    let params: P::Params = toml::Value::Table(params.clone())
+    toml::Value::Table(params.clone())
         .try_into()
-        .context("bad [params]")?;
+        .context("bad [params]")
+}
+
+fn run_typed<P: Pipeline>(params: &toml::Table, seed: u64, env: &Env<'_>) -> Result<Run> {
+    let params = typed_params::<P>(params)?;
     let env = Env { seed, ..*env };
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let output = P::compute(&params, &mut rng, &env)?;
@@ -360,11 +365,7 @@ fn tune_typed<P: Pipeline>(
     seed: u64,
     env: &Env<'_>,
 ) -> Result<Option<tune::Tuned>> {
-    check_params(params)?;
-    let params: P::Params = toml::Value::Table(params.clone())
-        .try_into()
-        .context("bad [params]")?;
-    P::tune(&params, &Env { seed, ..*env })
+    P::tune(&typed_params::<P>(params)?, &Env { seed, ..*env })
 }
 
 /// The pipelines whose settings come from a tuning search (`cargo xtask tune`).
