@@ -348,10 +348,7 @@ impl SetScores {
     ) -> Vec<Option<&'a PeerRow>> {
         self.specs
             .iter()
-            .map(|s| {
-                peer.iter()
-                    .find(|r| r.sequence == s.name && r.tracker == tracker && r.output == output)
-            })
+            .map(|s| peer_row(peer, &s.name, tracker, output))
             .collect()
     }
 
@@ -382,6 +379,17 @@ impl SetScores {
     fn mean(&self, tracker: TrackerKind, m: Measure) -> (f64, f64) {
         mean_ci(self.of(tracker).map(|s| s.of(m)))
     }
+}
+
+/// The peer's row of one sequence, tracker and output.
+fn peer_row<'a>(
+    peer: &'a [PeerRow],
+    sequence: &str,
+    tracker: &str,
+    output: &str,
+) -> Option<&'a PeerRow> {
+    peer.iter()
+        .find(|r| r.sequence == sequence && r.tracker == tracker && r.output == output)
 }
 
 /// The checks before anything runs: the three seed sets apart, and sequences in each.
@@ -421,11 +429,7 @@ fn check_orderings(p: &Params) -> Result<()> {
             continue;
         };
         for s in p.sequences.iter().chain(&p.fresh_sequences) {
-            if !p
-                .peer
-                .iter()
-                .any(|r| r.sequence == s.name && r.tracker == t && r.output == out)
-            {
+            if peer_row(&p.peer, &s.name, t, out).is_none() {
                 bail!(
                     "no peer row for {} {t} ({out}); run docs/comparisons/stonesoup_realistic.py",
                     s.name
