@@ -524,13 +524,13 @@ impl TuningScore<'_> {
     fn score(&mut self, settings: &toml::Table, setting: usize) -> Result<f64> {
         let trackers = &self.p.tuning.settings[setting].trackers;
         let key = toml::to_string(settings)?;
+        let config = track_config(settings)?;
         let mut sum = 0.0;
         for &t in trackers {
             if let Some(m) = self.cache.get(&(key.clone(), t.name())) {
                 sum += m;
                 continue;
             }
-            let config = track_config(settings)?;
             let motas = (0..self.seqs.len())
                 .into_par_iter()
                 .map(|i| {
