@@ -311,7 +311,8 @@ pub struct LocalDetectorSim {
     /// Probability per frame of finding its object when it is in the window and at most
     /// `occlusion` hidden (1 − the miss rate).
     pub p_detect: f64,
-    /// The same when its object is more than `occlusion` hidden by a nearer person.
+    /// The same when its object is more than `occlusion` hidden by a nearer person (a person
+    /// hidden entirely is never found: there is nothing of them in the image).
     pub p_detect_occluded: f64,
     /// A person counts as occluded when more than this fraction of the box is hidden.
     pub occlusion: f64,
@@ -532,6 +533,11 @@ impl SimulatedDetector {
     }
 }
 
+/// A person hidden by at least this fraction is not in the image at all: a detector that
+/// sees only pixels can neither find nor drift to them (the fraction is an area ratio, so a
+/// box inside a nearer one's may read a rounding error below 1).
+const FULLY_HIDDEN: f64 = 1.0 - 1e-9;
+
 impl LocalDetector for SimulatedDetector {
     fn detect(&mut self, frame: Frame, around: &BoundingBox) -> Option<BoundingBox> {
         bump(&self.stats.detector_frames);
@@ -547,7 +553,7 @@ impl LocalDetector for SimulatedDetector {
             .map(|people| {
                 people
                     .iter()
-                    .filter(|(_, b, _)| in_window(b))
+                    .filter(|(_, b, hidden)| in_window(b) && *hidden < FULLY_HIDDEN)
                     .copied()
                     .collect()
             })

@@ -595,6 +595,41 @@ mod simulated_detectors {
     }
 
     #[test]
+    fn a_fully_hidden_person_is_never_found_nor_drifted_to() {
+        // A detector spawned on A while it was visible, certain to find an occluded person,
+        // never reports A once A is entirely hidden (hidden fraction 1) and does not stale.
+        let n = 500;
+        let mut frames: BTreeMap<Frame, FrameTruth> = BTreeMap::new();
+        frames.insert(0, vec![(TrackId(0), A, 0.0)]);
+        for f in 1..=n {
+            frames.insert(f, vec![(TrackId(0), A, 1.0)]);
+        }
+        let mut d = SimulatedDetectors::over(Arc::new(frames), perfect(), 3)
+            .unwrap()
+            .detector(0, &A);
+        assert!(d.detect(0, &A).is_some());
+        assert!((1..=n).all(|f| d.detect(f, &A).is_none()));
+        // Nine tenths hidden, the same detector finds A every time.
+        let mut d = SimulatedDetectors::over(still(n, &[(0, A, 0.9)]), perfect(), 3)
+            .unwrap()
+            .detector(0, &A);
+        assert!((0..n).all(|f| d.detect(f, &A).is_some()));
+        // A detector on B, certain to drift to a neighbour in its window, never drifts to A
+        // hidden entirely beside it.
+        let b = bx(110.0, 200.0, 40.0, 100.0);
+        let config = LocalDetectorSim {
+            p_drift: 1.0,
+            ..perfect()
+        };
+        let content = still(n, &[(0, A, 1.0), (1, b, 0.0)]);
+        let mut d = SimulatedDetectors::over(content, config, 3)
+            .unwrap()
+            .detector(0, &b);
+        assert!((0..n).all(|f| d.detect(f, &b).is_some()));
+        assert_eq!(d.template(), Template::Person(TrackId(1)));
+    }
+
+    #[test]
     fn drifts_to_a_close_neighbour_at_the_stated_rate() {
         let n = 5000;
         // B's centre is 20 px from A's: each is inside the other's window.

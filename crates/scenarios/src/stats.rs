@@ -105,6 +105,15 @@ impl Paired {
         }
     }
 
+    /// The same interval with every end multiplied by `factor` (e.g. 100 for points).
+    pub(crate) fn scaled(self, factor: f64) -> Self {
+        Self {
+            mean: factor * self.mean,
+            low: factor * self.low,
+            high: factor * self.high,
+        }
+    }
+
     /// "mean [low, high]".
     pub(crate) fn show(&self) -> String {
         format!(
@@ -113,6 +122,39 @@ impl Paired {
             crate::fmt_num(self.low),
             crate::fmt_num(self.high)
         )
+    }
+}
+
+/// What a paired interval says of an ordering "ours ≥ theirs − margin" (the verdict a scenario
+/// records from its fresh runs and the suite then checks).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub(crate) enum Verdict {
+    /// The whole interval lies above −margin.
+    Holds,
+    /// The whole interval lies below −margin: a loss.
+    Loses,
+    /// The interval straddles −margin: not shown either way.
+    Undecided,
+}
+
+impl Verdict {
+    pub(crate) fn of(paired: &Paired, margin: f64) -> Self {
+        if paired.low > -margin {
+            Verdict::Holds
+        } else if paired.high < -margin {
+            Verdict::Loses
+        } else {
+            Verdict::Undecided
+        }
+    }
+
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Verdict::Holds => "holds",
+            Verdict::Loses => "loses",
+            Verdict::Undecided => "undecided",
+        }
     }
 }
 

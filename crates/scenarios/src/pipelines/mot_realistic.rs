@@ -23,7 +23,7 @@ use serde::Deserialize;
 use tracker_model::TrackSet;
 
 use crate::seeds::check_disjoint;
-use crate::stats::{Paired, mean_ci};
+use crate::stats::{Paired, Verdict, mean_ci};
 use crate::tune::{Coordinate, Tuned, coordinate_search, grid_csv, settings_file};
 use crate::{Claim, Env, Headline, Metrics, Pipeline, Section, Table, fmt_num};
 use mot::track::{TrackConfig, TrackerKind, track_detections};
@@ -85,38 +85,6 @@ pub struct Tuning {
     max_rounds: usize,
     /// The settings, searched in this order.
     settings: Vec<TunedSetting>,
-}
-
-/// What a paired interval says of an ordering "ours ≥ theirs − margin".
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Verdict {
-    /// The whole interval lies above −margin.
-    Holds,
-    /// The whole interval lies below −margin: a loss.
-    Loses,
-    /// The interval straddles −margin: not shown either way.
-    Undecided,
-}
-
-impl Verdict {
-    fn of(paired: &Paired, margin: f64) -> Self {
-        if paired.low > -margin {
-            Verdict::Holds
-        } else if paired.high < -margin {
-            Verdict::Loses
-        } else {
-            Verdict::Undecided
-        }
-    }
-
-    fn name(self) -> &'static str {
-        match self {
-            Verdict::Holds => "holds",
-            Verdict::Loses => "loses",
-            Verdict::Undecided => "undecided",
-        }
-    }
 }
 
 /// Its parameters.

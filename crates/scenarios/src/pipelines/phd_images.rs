@@ -8,9 +8,14 @@
 //! `success_rate`, IoU ≥ 0.5, the definition the `phd-pedestrians` pipeline uses), as mean ±
 //! 95 % CI over the reported runs, with the paired SR gain of each fused tracker.
 //!
-//! Fairness: the baselines' p_D is the global detector's recall measured on tuning runs drawn
+//! Fairness: every filter's p_D is the global detector's recall measured on tuning runs drawn
 //! from a seed separate from the reported ones; the fusion settings are the scenario file's,
-//! the same for both fused trackers.
+//! the same for every fused tracker. A control fuses local detectors that are blind (they
+//! never report), so the fused tracker's machinery without any image content shows what the
+//! images themselves add. Claims are made on fresh runs (a third seed, `docs/seeds.md`) by
+//! paired 95 % t intervals, with the verdict of their first run recorded.
+
+use std::collections::BTreeMap;
 
 use std::sync::Arc;
 
@@ -29,7 +34,8 @@ use sensors_video::{SpriteConfig, SpriteRenderer};
 use serde::Deserialize;
 use tracker_model::{BoundingBox, LocalDetectorFactory, TrackSet};
 
-use crate::stats::mean_ci;
+use crate::seeds::check_disjoint;
+use crate::stats::{Paired, Verdict, mean_ci};
 use crate::{
     Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table, fmt_num,
 };
@@ -45,20 +51,24 @@ pub struct Params {
     title: String,
     /// Reported runs: streams 0..n_runs of the scenario's seed.
     n_runs: usize,
-    /// Tuning runs (the baselines' p_D = recall measured on them): streams of this seed.
+    /// Tuning runs (every filter's p_D = recall measured on them): streams of this seed.
     tuning_seed: u64,
     n_tuning_runs: usize,
+    /// Fresh runs, generated after the settings were frozen (the claims are made on them):
+    /// streams 0..n_fresh_runs of this seed.
+    fresh_seed: u64,
+    n_fresh_runs: usize,
+    /// The verdict of each claim of [`CLAIMS`] on the fresh runs, recorded from their first run.
+    fresh_verdicts: BTreeMap<String, Verdict>,
     scene: SceneConfig,
     /// The renderer; its width and height must equal `scene.image`.
     sprites: SpriteConfig,
-    /// Filter settings shared by every method (p_D: see `fused_filter_p_detect`).
+    /// Filter settings shared by every method (p_D: the measured recall).
     filter: PhdConfig,
     #[serde(default)]
     gm: GmConfig,
-    /// Fusion and detector management (eqs. 1-2, 9-10), the same for both fused trackers.
+    /// Fusion and detector management (eqs. 1-2, 9-10), the same for every fused tracker.
     fusion: FusionConfig,
-    /// p_D of the fused filters.
-    fused_filter_p_detect: f64,
     /// The image local detectors.
     #[serde(default)]
     detector: DetectorConfig,
@@ -79,14 +89,40 @@ struct Paper {
     fused_sr: f64,
 }
 
-/// The four trackers.
-const NAMES: [&str; 4] = [
+/// The trackers: the two baselines, the fused tracker with image and with simulated local
+/// detectors, and the control with blind ones.
+const NAMES: [&str; METHODS] = [
     "global-only SMC-PHD",
     "GM-PHD",
     "SMC-PHD + image local detectors",
     "SMC-PHD + simulated local detectors",
+    "SMC-PHD + blind local detectors (control)",
 ];
-const KEYS: [&str; 4] = ["smc_global", "gm", "fused_image", "fused_sim"];
+const KEYS: [&str; METHODS] = [
+    "smc_global",
+    "gm",
+    "fused_image",
+    "fused_sim",
+    "fused_blind",
+];
+const METHODS: usize = 5;
+
+/// SR (higher is better) or FAF (lower is better).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Measure {
+    Sr,
+    Faf,
+}
+
+/// The claims, made on the fresh runs: (key, measure, method, the method it is at least as good
+/// as). The image-fused tracker's SR against global-only (what fusion gains) and against the
+/// blind control (what the images add beyond the fused tracker's own management), and its
+/// false alarms against global-only's (where fusion pays).
+const CLAIMS: [(&str, Measure, usize, usize); 3] = [
+    ("image_sr_ge_global", Measure::Sr, 2, 0),
+    ("image_sr_ge_blind", Measure::Sr, 2, 4),
+    ("image_faf_le_global", Measure::Faf, 2, 0),
+];
 
 /// SR and FAF of one tracker on one run.
 #[derive(Debug, Clone, Copy)]
@@ -103,7 +139,10 @@ pub struct Output {
     recall: f64,
     detector: Vec<(f64, f64)>,
     /// Per method, per reported run.
-    scores: [Vec<Score>; 4],
+    scores: PerMethod,
+    /// Per method, per fresh run.
+    fresh: PerMethod,
+    fresh_verdicts: BTreeMap<String, Verdict>,
     /// First run: truth and the estimates of the global-only and image-fused trackers at the
     /// overlay frame.
     overlay: Option<Overlay>,
@@ -210,39 +249,122 @@ fn run_fused<D: LocalDetectorFactory>(
     )
 }
 
-/// Runs method `m` on `run`; returns its score and its per-frame output.
-fn track(
-    p: &Params,
-    baseline: PhdConfig,
-    run: &Run,
-    m: usize,
-) -> Result<(Score, Vec<FrameOutput>)> {
-    let fused_filter = PhdConfig {
-        p_detect: p.fused_filter_p_detect,
-        ..p.filter
-    };
+/// Runs method `m` on `run` with `filter` (p_D the measured recall); returns its score and its
+/// per-frame output.
+fn track(p: &Params, filter: PhdConfig, run: &Run, m: usize) -> Result<(Score, Vec<FrameOutput>)> {
     let (tracks, frames) = match m {
         0 => run_tracker(
-            PhdTracker::global_only(SmcPhd::new(baseline, run.seeds[0])?),
+            PhdTracker::global_only(SmcPhd::new(filter, run.seeds[0])?),
             run,
             None,
         )?,
         1 => run_tracker(
-            PhdTracker::global_only(GmPhd::new(baseline, p.gm)?),
+            PhdTracker::global_only(GmPhd::new(filter, p.gm)?),
             run,
             None,
         )?,
         2 => {
             let feed = FrameFeed::new();
             let factory = ImageDetectors::new(p.detector.clone(), feed.clone(), run.seeds[2])?;
-            run_fused(p, fused_filter, factory, run, Some(&feed))?
+            run_fused(p, filter, factory, run, Some(&feed))?
+        }
+        3 => {
+            let factory = SimulatedDetectors::new(&run.scene, p.local, run.seeds[3])?;
+            run_fused(p, filter, factory, run, None)?
         }
         _ => {
-            let factory = SimulatedDetectors::new(&run.scene, p.local, run.seeds[3])?;
-            run_fused(p, fused_filter, factory, run, None)?
+            let blind = LocalDetectorSim {
+                p_detect: 0.0,
+                p_detect_occluded: 0.0,
+                p_drift: 0.0,
+                p_stale: 0.0,
+                ..p.local
+            };
+            let factory = SimulatedDetectors::new(&run.scene, blind, run.seeds[3])?;
+            run_fused(p, filter, factory, run, None)?
         }
     };
     Ok((score(&run.scene, &tracks)?, frames))
+}
+
+/// The checks before anything runs: run counts, the three seeds apart, the renderer's size,
+/// a recorded verdict for every claim, and the configurations.
+fn check(p: &Params, seed: u64) -> Result<()> {
+    ensure!(p.n_runs >= 2, "n_runs must be at least 2 (for a CI)");
+    ensure!(
+        p.n_fresh_runs >= 2,
+        "n_fresh_runs must be at least 2 (for a CI)"
+    );
+    ensure!(p.n_tuning_runs >= 1, "n_tuning_runs must be at least 1");
+    check_disjoint(&[
+        ("tuning", &[p.tuning_seed]),
+        ("reported", &[seed]),
+        ("fresh", &[p.fresh_seed]),
+    ])?;
+    ensure!(
+        (p.sprites.width as f64 - p.scene.image[0]).abs() < 0.5
+            && (p.sprites.height as f64 - p.scene.image[1]).abs() < 0.5,
+        "sprites.width/height must equal scene.image"
+    );
+    for (key, ..) in CLAIMS {
+        ensure!(
+            p.fresh_verdicts.contains_key(key),
+            "fresh_verdicts has no verdict for {key:?}"
+        );
+    }
+    if let Some(k) = p
+        .fresh_verdicts
+        .keys()
+        .find(|k| !CLAIMS.iter().any(|(c, ..)| c == k))
+    {
+        anyhow::bail!("fresh_verdicts names {k:?}, which is no claim");
+    }
+    p.fusion.check()?;
+    p.filter.check()?;
+    p.local.check()?;
+    p.detector.check()?;
+    Ok(())
+}
+
+/// Streams 0..n of `seed`, rendered.
+fn make_runs(p: &Params, seed: u64, n: usize) -> Result<Vec<Run>> {
+    (0..n as u64)
+        .into_par_iter()
+        .map(|i| make_run(p, seed, i, true))
+        .collect()
+}
+
+/// Each method's scores, run by run.
+type PerMethod = [Vec<Score>; METHODS];
+
+/// Every method on every run: the scores per method, and the first run's per-frame output
+/// per method (for the overlay).
+fn score_runs(
+    p: &Params,
+    filter: PhdConfig,
+    runs: &[Run],
+    env: &Env<'_>,
+) -> Result<(PerMethod, Vec<Vec<FrameOutput>>)> {
+    let jobs: Vec<(usize, usize)> = (0..runs.len())
+        .flat_map(|r| (0..METHODS).map(move |m| (r, m)))
+        .collect();
+    let results: Vec<(Score, Vec<FrameOutput>)> = jobs
+        .par_iter()
+        .map(|&(r, m)| {
+            let out = track(p, filter, &runs[r], m);
+            env.progress.advance(1);
+            out
+        })
+        .collect::<Result<_>>()?;
+    let mut scores: PerMethod = Default::default();
+    let mut first = Vec::with_capacity(METHODS);
+    for (&(r, m), (score, frames)) in jobs.iter().zip(results) {
+        scores[m].push(score);
+        if r == 0 {
+            first.push(frames);
+        }
+    }
+    Ok((scores, first))
 }
 
 impl Pipeline for PhdImages {
@@ -250,67 +372,31 @@ impl Pipeline for PhdImages {
     type Output = Output;
 
     fn compute(p: &Params, _rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Output> {
-        let seed = env.seed;
-        ensure!(p.n_runs >= 2, "n_runs must be at least 2 (for a CI)");
-        ensure!(p.n_tuning_runs >= 1, "n_tuning_runs must be at least 1");
-        ensure!(
-            p.tuning_seed != seed,
-            "tuning_seed must differ from the scenario's seed"
-        );
-        ensure!(
-            (p.sprites.width as f64 - p.scene.image[0]).abs() < 0.5
-                && (p.sprites.height as f64 - p.scene.image[1]).abs() < 0.5,
-            "sprites.width/height must equal scene.image"
-        );
-        ensure!(
-            p.fused_filter_p_detect > 0.0 && p.fused_filter_p_detect < 1.0,
-            "fused_filter_p_detect is a probability in (0, 1)"
-        );
-        p.fusion.check()?;
-        p.filter.check()?;
-        p.local.check()?;
-        p.detector.check()?;
-        // The baselines' p_D: the global detector's recall on the tuning runs.
+        check(p, env.seed)?;
+        // Every filter's p_D: the global detector's recall on the tuning runs.
         let tuning: Vec<Run> = (0..p.n_tuning_runs as u64)
             .into_par_iter()
             .map(|i| make_run(p, p.tuning_seed, i, false))
             .collect::<Result<_>>()?;
         let recall = mean_ci(tuning.iter().map(|r| detector_quality(&r.scene).0)).0;
-        let baseline = PhdConfig {
+        let filter = PhdConfig {
             p_detect: recall.clamp(0.05, 0.99),
             ..p.filter
         };
-        env.progress.set_length((p.n_runs * 4) as u64);
-        let runs: Vec<Run> = (0..p.n_runs as u64)
-            .into_par_iter()
-            .map(|i| make_run(p, seed, i, true))
-            .collect::<Result<_>>()?;
-        let jobs: Vec<(usize, usize)> = (0..runs.len())
-            .flat_map(|r| (0..4).map(move |m| (r, m)))
-            .collect();
-        let results: Vec<(Score, Vec<FrameOutput>)> = jobs
-            .par_iter()
-            .map(|&(r, m)| {
-                let out = track(p, baseline, &runs[r], m);
-                env.progress.advance(1);
-                out
-            })
-            .collect::<Result<_>>()?;
-        let mut scores: [Vec<Score>; 4] = Default::default();
-        for (&(_, m), (s, _)) in jobs.iter().zip(&results) {
-            scores[m].push(*s);
-        }
+        env.progress
+            .set_length(((p.n_runs + p.n_fresh_runs) * METHODS) as u64);
+        let runs = make_runs(p, env.seed, p.n_runs)?;
+        let (scores, first) = score_runs(p, filter, &runs, env)?;
+        let (fresh, _) = score_runs(p, filter, &make_runs(p, p.fresh_seed, p.n_fresh_runs)?, env)?;
         let f = p.overlay_frame;
-        let first = &runs[0];
         let estimates = |m: usize| -> Vec<BoundingBox> {
-            results[m]
-                .1
+            first[m]
                 .iter()
                 .find(|o| o.frame == f)
                 .map(|o| o.estimates.iter().map(|e| e.bbox).collect())
                 .unwrap_or_default()
         };
-        let overlay = first.scene.by_frame.get(&f).map(|people| Overlay {
+        let overlay = runs[0].scene.by_frame.get(&f).map(|people| Overlay {
             frame: f,
             truth: people.iter().map(|(_, b, _)| *b).collect(),
             global: estimates(0),
@@ -323,6 +409,8 @@ impl Pipeline for PhdImages {
             recall,
             detector: runs.iter().map(|r| detector_quality(&r.scene)).collect(),
             scores,
+            fresh,
+            fresh_verdicts: p.fresh_verdicts.clone(),
             overlay,
             paper: p.paper.clone(),
         })
@@ -339,18 +427,20 @@ impl Pipeline for PhdImages {
             "detector_false_per_frame".into(),
             mean_ci(out.detector.iter().map(|d| d.1)).0,
         );
-        for (k, key) in KEYS.iter().enumerate() {
-            let (sr, sr_ci) = mean_ci(out.scores[k].iter().map(|s| s.sr));
-            let (faf, faf_ci) = mean_ci(out.scores[k].iter().map(|s| s.faf));
-            m.insert(format!("{key}_sr"), sr);
-            m.insert(format!("{key}_sr_ci95"), sr_ci);
-            m.insert(format!("{key}_faf"), faf);
-            m.insert(format!("{key}_faf_ci95"), faf_ci);
-        }
-        for (k, key) in [(2, "fused_image"), (3, "fused_sim")] {
-            let (g, ci) = gain(out, k);
-            m.insert(format!("{key}_minus_global_sr"), g);
-            m.insert(format!("{key}_minus_global_sr_ci95"), ci);
+        for (prefix, scores) in [("", &out.scores), ("fresh_", &out.fresh)] {
+            for (k, key) in KEYS.iter().enumerate() {
+                let (sr, sr_ci) = mean_ci(scores[k].iter().map(|s| s.sr));
+                let (faf, faf_ci) = mean_ci(scores[k].iter().map(|s| s.faf));
+                m.insert(format!("{prefix}{key}_sr"), sr);
+                m.insert(format!("{prefix}{key}_sr_ci95"), sr_ci);
+                m.insert(format!("{prefix}{key}_faf"), faf);
+                m.insert(format!("{prefix}{key}_faf_ci95"), faf_ci);
+            }
+            for (k, key) in KEYS.iter().enumerate().skip(2) {
+                let g = gain(scores, k, 0);
+                m.insert(format!("{prefix}{key}_minus_global_sr"), g.mean);
+                m.insert(format!("{prefix}{key}_minus_global_sr_low"), g.low);
+            }
         }
         m
     }
@@ -366,25 +456,47 @@ impl Pipeline for PhdImages {
                 out.title
             ),
             summary: summary(out),
-            tables: vec![sr_table(out), per_run_table(out)],
+            tables: vec![
+                sr_table(out, "reported", &out.scores),
+                sr_table(out, "fresh", &out.fresh),
+                per_run_table("reported", &out.scores),
+                per_run_table("fresh", &out.fresh),
+            ],
             figures,
         }
     }
 
     fn claims(out: &Output) -> Vec<Claim> {
-        let (g, ci) = gain(out, 2);
-        let (faf, _) = mean_ci(out.scores[2].iter().map(|s| s.faf));
-        vec![Claim::new(
-            format!(
-                "{}: SR with image local detectors above global-only SR (gain {} ± {} \
-                     points), with FAF {} <= 1.0",
-                out.title,
-                fmt_num(100.0 * g),
-                fmt_num(100.0 * ci),
-                fmt_num(faf)
-            ),
-            g > 0.0 && faf <= 1.0,
-        )]
+        CLAIMS
+            .iter()
+            .map(|&(key, measure, k, j)| {
+                // Oriented so that ≥ 0 favours method k.
+                let (paired, what, unit) = match measure {
+                    Measure::Sr => (gain(&out.fresh, k, j).scaled(100.0), "SR ≥", "points"),
+                    Measure::Faf => (
+                        faf_saving(&out.fresh, k, j),
+                        "FAF ≤",
+                        "false boxes per frame",
+                    ),
+                };
+                let verdict = Verdict::of(&paired, 0.0);
+                let recorded = out.fresh_verdicts[key];
+                Claim::new(
+                    format!(
+                        "{}: {}'s {what} {}'s on the {} fresh runs: paired difference {} {unit} \
+                         (95 % t, positive favours the first) — {} (recorded: {})",
+                        out.title,
+                        NAMES[k],
+                        NAMES[j],
+                        out.fresh[k].len(),
+                        paired.show(),
+                        verdict.name(),
+                        recorded.name()
+                    ),
+                    verdict == recorded,
+                )
+            })
+            .collect()
     }
 
     fn headlines(out: &Output) -> Vec<Headline> {
@@ -418,14 +530,15 @@ impl Pipeline for PhdImages {
     }
 }
 
-/// The SR and FAF table in the measures of Yoon et al. (2016), Table 1: each tracker's mean ±
-/// 95 % CI over the runs, with the paired SR gain of the fused trackers over global-only.
-fn sr_table(out: &Output) -> Table {
+/// The SR and FAF table in the measures of Yoon et al. (2016), Table 1, on one set of runs:
+/// each tracker's mean ± 95 % CI, with the paired SR gain of the fused trackers over
+/// global-only.
+fn sr_table(out: &Output, set: &str, scores: &PerMethod) -> Table {
     let mut t = Table::new(
         &format!(
-            "SR and FAF, mean ± 95 % CI over {} runs ({} frames of {} × {} rendered video \
-             each)",
-            out.scores[0].len(),
+            "SR and FAF on the {} {set} runs, mean ± 95 % CI ({} frames of {} × {} rendered \
+             video each)",
+            scores[0].len(),
             out.frames,
             out.size.0,
             out.size.1
@@ -434,15 +547,14 @@ fn sr_table(out: &Output) -> Table {
             "tracker",
             "SR (%)",
             "FAF",
-            "SR gain over global-only (points)",
+            "SR gain over global-only (points, mean [95 % paired t])",
         ],
     );
     for (k, name) in NAMES.iter().enumerate() {
-        let (sr, sr_ci) = mean_ci(out.scores[k].iter().map(|s| s.sr));
-        let (faf, faf_ci) = mean_ci(out.scores[k].iter().map(|s| s.faf));
+        let (sr, sr_ci) = mean_ci(scores[k].iter().map(|s| s.sr));
+        let (faf, faf_ci) = mean_ci(scores[k].iter().map(|s| s.faf));
         let g = if k >= 2 {
-            let (g, ci) = gain(out, k);
-            format!("{} ± {}", fmt_num(100.0 * g), fmt_num(100.0 * ci))
+            gain(scores, k, 0).scaled(100.0).show()
         } else {
             "-".to_string()
         };
@@ -456,15 +568,14 @@ fn sr_table(out: &Output) -> Table {
     t
 }
 
-/// The per-run table: every tracker's SR on each reported run, behind the paired gains.
-fn per_run_table(out: &Output) -> Table {
-    let mut per_run = Table::new(
-        "SR (%) per reported run",
-        &["run", NAMES[0], NAMES[1], NAMES[2], NAMES[3]],
-    );
-    for r in 0..out.scores[0].len() {
+/// The per-run table of one set: every tracker's SR on each run, behind the paired gains.
+fn per_run_table(set: &str, scores: &PerMethod) -> Table {
+    let mut header = vec!["run"];
+    header.extend(NAMES);
+    let mut per_run = Table::new(&format!("SR (%) per {set} run"), &header);
+    for r in 0..scores[0].len() {
         let mut row = vec![r.to_string()];
-        row.extend((0..4).map(|k| fmt_num(100.0 * out.scores[k][r].sr)));
+        row.extend(scores.iter().map(|s| fmt_num(100.0 * s[r].sr)));
         per_run.row(row);
     }
     per_run
@@ -482,8 +593,10 @@ fn summary(out: &Output) -> String {
          cluttered background, nearer people hiding farther ones) and the local detectors \
          of the image-fused tracker run on those pixels: HOG blocks, online boosting and an \
          RGB histogram (image-detector). The global detector is simulated from the truth \
-         (recall {:.0} %, {} false boxes per frame on the reported runs). Baselines use \
-         p_D = {:.2}, the recall measured on separate tuning runs. The report draws boxes \
+         (recall {:.0} %, {} false boxes per frame on the reported runs). Every filter, \
+         fused or not, uses p_D = {:.2}, the recall measured on separate tuning runs. The \
+         control fuses blind local detectors (they never report), so it shows what the fused \
+         tracker's own management does without any image content. The report draws boxes \
          as outlines (the report has no raster images, so the rendered frame itself is not \
          shown).",
         100.0 * recall,
@@ -529,14 +642,16 @@ fn overlay_figure(out: &Output, overlay: &Overlay) -> Figure {
     )
 }
 
-/// Paired SR gain of method `k` over global-only: mean ± 95 % CI over runs.
-fn gain(out: &Output, k: usize) -> (f64, f64) {
-    mean_ci(
-        out.scores[k]
-            .iter()
-            .zip(&out.scores[0])
-            .map(|(a, b)| a.sr - b.sr),
-    )
+/// Paired SR gain of method `k` over method `j`, per run: mean and 95 % t interval.
+fn gain(scores: &PerMethod, k: usize, j: usize) -> Paired {
+    let sr = |m: usize| scores[m].iter().map(|s| s.sr).collect::<Vec<_>>();
+    Paired::of(&sr(k), &sr(j))
+}
+
+/// Paired FAF of method `j` minus method `k`, per run (positive: `k` has fewer false alarms).
+fn faf_saving(scores: &PerMethod, k: usize, j: usize) -> Paired {
+    let faf = |m: usize| scores[m].iter().map(|s| s.faf).collect::<Vec<_>>();
+    Paired::of(&faf(j), &faf(k))
 }
 
 /// A box as a closed polyline in image coordinates.
