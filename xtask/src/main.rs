@@ -13,6 +13,8 @@ use clap::{Parser, Subcommand};
 mod appendix;
 mod ci;
 mod data;
+#[cfg(test)]
+mod doc_numbers;
 mod eval;
 mod fuzz;
 mod junit;
