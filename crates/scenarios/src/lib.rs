@@ -383,20 +383,16 @@ pub fn tune_pipeline(
     seed: u64,
     env: &Env<'_>,
 ) -> Result<tune::Tuned> {
-    let tune = TUNERS
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map(|(_, f)| *f)
-        .ok_or_else(|| {
-            anyhow!(
-                "pipeline {name:?} has no tuning search; tunable: {}",
-                TUNERS
-                    .iter()
-                    .map(|(n, _)| *n)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            )
-        })?;
+    let tune = registered(TUNERS, name).ok_or_else(|| {
+        anyhow!(
+            "pipeline {name:?} has no tuning search; tunable: {}",
+            TUNERS
+                .iter()
+                .map(|(n, _)| *n)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    })?;
     tune(params, seed, env)?.ok_or_else(|| anyhow!("pipeline {name:?} returned no settings"))
 }
 
@@ -439,6 +435,11 @@ const PIPELINES: &[(&str, RunFn)] = &[
     ("video-mog", run_typed::<pipelines::video::VideoMog>),
 ];
 
+/// The entry of `name` in a registry of pipelines by name.
+fn registered<F: Copy>(registry: &[(&str, F)], name: &str) -> Option<F> {
+    registry.iter().find(|(n, _)| *n == name).map(|(_, f)| *f)
+}
+
 /// Whether a pipeline of this name exists.
 pub fn is_pipeline(name: &str) -> bool {
     PIPELINES.iter().any(|(n, _)| *n == name)
@@ -451,16 +452,12 @@ pub fn pipeline_names() -> Vec<&'static str> {
 
 /// Runs the pipeline `name` on `params` with a generator seeded from `seed`.
 pub fn run_pipeline(name: &str, params: &toml::Table, seed: u64, env: &Env<'_>) -> Result<Run> {
-    let run = PIPELINES
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map(|(_, f)| *f)
-        .ok_or_else(|| {
-            anyhow!(
-                "unknown pipeline {name:?}; known: {}",
-                pipeline_names().join(", ")
-            )
-        })?;
+    let run = registered(PIPELINES, name).ok_or_else(|| {
+        anyhow!(
+            "unknown pipeline {name:?}; known: {}",
+            pipeline_names().join(", ")
+        )
+    })?;
     run(params, seed, env)
 }
 
