@@ -1,0 +1,188 @@
+//! [`BoxTracker`]: any of the three associations behind tracker-model's [`Tracker`].
+//!
+//! The reference steps every frame, with or without detections. A step after a gap of k
+//! frames replays the k − 1 empty frames first (each one prediction and one more miss, as
+//! there), which stops as soon as no track is left: every track dies after at most
+//! `max_misses + 1` empty frames, so a gap costs at most that many frames of work, however
+//! long it is.
+
+use std::collections::BTreeMap;
+
+use tracker_model::{
+    BoundingBox, Detection, DetectionId, Frame, Track, TrackId, TrackPoint, TrackSet, TrackState,
+    Tracker,
+};
+
+use crate::error::{Error, Result};
+use crate::kalman::Corners;
+
+/// A box detection as the associations read it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BoxDetection {
+    /// The box.
+    pub bbox: BoundingBox,
+    /// Its corners `[x₁, y₁, x₂, y₂]`.
+    pub corners: Corners,
+    /// The detector's score (1 when the detection has none, as in the reference).
+    pub score: f64,
+}
+
+impl BoxDetection {
+    /// Reads a detection: it must be a box, finite, with a finite score if it has one.
+    pub fn of(d: &Detection) -> Result<Self> {
+        let bbox = d.require_box("SORT, ByteTrack and OC-SORT track boxes")?;
+        let corners = [
+            bbox.left,
+            bbox.top,
+            bbox.left + bbox.width,
+            bbox.top + bbox.height,
+        ];
+        if !corners.iter().all(|v| v.is_finite()) {
+            return Err(tracker_model::Error::NonFinite {
+                what: "detection box",
+            }
+            .into());
+        }
+        let score = d.score.unwrap_or(1.0);
+        if !score.is_finite() {
+            return Err(tracker_model::Error::NonFinite {
+                what: "detection score",
+            }
+            .into());
+        }
+        Ok(Self {
+            bbox,
+            corners,
+            score,
+        })
+    }
+}
+
+/// Hands out track numbers 0, 1, 2, … in the order tracks are confirmed (the reference's
+/// order); a track's id is its number + 1.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct IdSource {
+    next: u64,
+}
+
+impl IdSource {
+    /// The next number.
+    pub fn allocate(&mut self) -> u64 {
+        self.next += 1;
+        self.next - 1
+    }
+}
+
+/// One frame of a box tracker's association.
+pub trait Association {
+    /// Whether any track (confirmed or not) is alive.
+    fn has_tracks(&self) -> bool;
+
+    /// One frame: predict every track, associate, update, start and end tracks. Returns the
+    /// detections that belong to a confirmed track, as (detection index, track number).
+    fn associate(
+        &mut self,
+        detections: &[BoxDetection],
+        ids: &mut IdSource,
+    ) -> Result<Vec<(usize, u64)>>;
+}
+
+/// A detection given to a confirmed track at a step.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Assigned {
+    /// The track.
+    pub track: TrackId,
+    /// The detection's id.
+    pub detection: DetectionId,
+    /// The detection's position in the step's slice.
+    pub index: usize,
+    /// The detection's box (the reference outputs detection boxes, not filtered ones).
+    pub bbox: BoundingBox,
+}
+
+/// A box tracker: an [`Association`] stepped frame by frame, with the confirmed tracks'
+/// boxes kept for [`Tracker::finish`].
+#[derive(Debug, Clone)]
+pub struct BoxTracker<A> {
+    association: A,
+    ids: IdSource,
+    previous: Option<Frame>,
+    tracks: BTreeMap<TrackId, Track>,
+}
+
+impl<A: Association> BoxTracker<A> {
+    /// A tracker around `association`, before its first frame.
+    pub fn new(association: A) -> Self {
+        Self {
+            association,
+            ids: IdSource::default(),
+            previous: None,
+            tracks: BTreeMap::new(),
+        }
+    }
+
+    /// The association (its settings and live tracks).
+    pub fn association(&self) -> &A {
+        &self.association
+    }
+
+    /// Steps to `frame` with its detections and returns those given to confirmed tracks, in
+    /// the association's order.
+    pub fn update(&mut self, frame: Frame, detections: &[Detection]) -> Result<Vec<Assigned>> {
+        let boxes = detections
+            .iter()
+            .map(BoxDetection::of)
+            .collect::<Result<Vec<_>>>()?;
+        if let Some(previous) = self.previous {
+            if frame <= previous {
+                return Err(Error::FramesOutOfOrder { frame, previous });
+            }
+            for _ in previous + 1..frame {
+                if !self.association.has_tracks() {
+                    break;
+                }
+                self.association.associate(&[], &mut self.ids)?;
+            }
+        }
+        self.previous = Some(frame);
+        let pairs = self.association.associate(&boxes, &mut self.ids)?;
+        let mut out = Vec::with_capacity(pairs.len());
+        for (index, number) in pairs {
+            let track = TrackId(number + 1);
+            let bbox = boxes[index].bbox;
+            self.tracks
+                .entry(track)
+                .or_insert_with(|| Track::new(track))
+                .push(TrackPoint::boxed(frame, bbox))?;
+            out.push(Assigned {
+                track,
+                detection: detections[index].id,
+                index,
+                bbox,
+            });
+        }
+        Ok(out)
+    }
+}
+
+impl<A: Association> Tracker for BoxTracker<A> {
+    type Error = Error;
+
+    /// [`BoxTracker::update`]: each confirmed track given a detection, at the detection's box.
+    fn step(&mut self, frame: Frame, detections: &[Detection]) -> Result<Vec<TrackState>> {
+        Ok(self
+            .update(frame, detections)?
+            .into_iter()
+            .map(|a| TrackState {
+                id: a.track,
+                point: TrackPoint::boxed(frame, a.bbox),
+            })
+            .collect())
+    }
+
+    /// Every confirmed track's boxes, at the frames a detection was given to it.
+    fn finish(&mut self) -> Result<TrackSet> {
+        let tracks = std::mem::take(&mut self.tracks);
+        Ok(TrackSet::from_tracks(tracks.into_values().collect())?)
+    }
+}
