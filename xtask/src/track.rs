@@ -1,4 +1,4 @@
-//! `cargo xtask track --tracker mcmcda|gnn|phd --input DETS.txt --out TRACKS.txt`: reads
+//! `cargo xtask track --tracker mcmcda|gnn|phd|sort|bytetrack|ocsort --input DETS.txt --out TRACKS.txt`: reads
 //! MOTChallenge detections and an optional configuration, runs `mot::track` and writes
 //! MOTChallenge tracks. `--print-config` prints the effective configuration instead.
 
@@ -45,7 +45,9 @@ pub struct TrackArgs {
     /// tracker, output frame by frame; gnn: global nearest neighbour with M-of-N
     /// confirmation on the box centres (all three output boxes fitted to each track's
     /// detections); gnn-online: GNN output frame by frame, coasting through misses; phd:
-    /// SMC-PHD on the boxes themselves.
+    /// SMC-PHD on the boxes themselves; sort, bytetrack, ocsort: SORT, ByteTrack and OC-SORT
+    /// with roboflow trackers 2.6.1's defaults (the detections' own boxes, `[sort]`,
+    /// `[bytetrack]`, `[ocsort]`).
     #[arg(long, required_unless_present = "print_config")]
     pub tracker: Option<mot::track::TrackerKind>,
     /// Detections (frame,id,left,top,width,height,conf,...).
@@ -56,7 +58,8 @@ pub struct TrackArgs {
     pub out: Option<PathBuf>,
     /// TOML with optional `[model]` (MCMCDA's and GNN's model, overriding a model scaled
     /// to the median box width), `[online]`, `[gnn]` and `[phd]` (overriding a PHD model
-    /// scaled to the boxes) tables; every table present is checked. See --print-config
+    /// scaled to the boxes), `[sort]`, `[bytetrack]` and `[ocsort]` tables; every table
+    /// present is checked. See --print-config
     /// and fixtures/configs/.
     #[arg(long)]
     pub config: Option<PathBuf>,
@@ -344,6 +347,10 @@ fn fitted_summary(tracker: TrackerKind, c: &mot::track::EffectiveConfig) -> Stri
         TrackerKind::Phd => format!(
             "p_d {:.3}, clutter {:.3}/frame, births {:.4}/frame",
             c.phd.p_detect, c.phd.clutter_rate, c.phd.birth_rate
+        ),
+        TrackerKind::Sort | TrackerKind::ByteTrack | TrackerKind::OcSort => format!(
+            "the [{tracker}] settings (roboflow trackers 2.6.1's defaults unless --config sets \
+             them); scores read as they are"
         ),
         _ => {
             format!(

@@ -17,6 +17,9 @@ pub enum Error {
     /// The PHD filter rejected its configuration or input.
     #[error(transparent)]
     Phd(#[from] phd_filter::Error),
+    /// SORT, ByteTrack or OC-SORT rejected its configuration or input.
+    #[error(transparent)]
+    BoxTracker(#[from] box_trackers::Error),
     /// The image local detectors rejected their configuration.
     #[error(transparent)]
     Detector(#[from] image_detector::Error),

@@ -34,7 +34,12 @@ pub(super) fn track_points(
             let linked = link_tracklets(map.tracks, &detections, model.config(), max_gap);
             (detections, linked)
         }
-        TrackerKind::Gnn | TrackerKind::Phd => {
+        // The fit's GNN pass; the PHD and box trackers never come here otherwise.
+        TrackerKind::Gnn
+        | TrackerKind::Phd
+        | TrackerKind::Sort
+        | TrackerKind::ByteTrack
+        | TrackerKind::OcSort => {
             let (detections, _, problem) =
                 problem_of(&model, rows, scores, Problem::without_neighbourhoods)?;
             let window = problem.all_scans()?;

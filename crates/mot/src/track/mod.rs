@@ -1,7 +1,8 @@
 //! Trackers for detection files: what `cargo xtask track` and the `mot-track` and
 //! `mot-realistic` pipelines run. MCMCDA (offline batch, or online with a sliding window) and
 //! GNN associate the box centres as point measurements; the SMC-PHD filter tracks the boxes
-//! themselves. Without a configuration each tracker uses its model scaled to the boxes
+//! themselves; SORT, ByteTrack and OC-SORT (the `box-trackers` crate, with the defaults of
+//! roboflow `trackers`) track the boxes frame by frame. Without a configuration each tracker uses its model scaled to the boxes
 //! ([`McmcdaConfig::for_boxes`], [`PhdConfig::for_boxes`]) and then fitted to the file
 //! ([`fit_model`]: p_d, clutter and birth rates, R and q from the confident tracks of a first
 //! GNN pass, iterated).
@@ -24,6 +25,7 @@ use std::fmt;
 use std::str::FromStr;
 
 use crate::error::{Error, InTable, Result, invalid};
+use box_trackers::{ByteTrackConfig, OcSortConfig, SortConfig};
 use mcmcda::{
     McmcdaConfig, MeasId, NearestNeighbourConfig, OnlineConfig, OnlineTracker, Problem, TrackInit,
     chain::{Partition, run_chains},
@@ -39,12 +41,14 @@ mod association;
 mod boxes;
 mod fit;
 mod phd;
+mod sort_family;
 
 use association::track_points;
 use boxes::{detection_boxes, kernel_reach};
 use fit::{Detections, centres, detections_by_frame, problem_of, score_ratios};
 pub(crate) use phd::Labeller;
 use phd::{MAX_COAST_FRAMES, track_boxes_phd};
+use sort_family::track_sort_family;
 
 pub use boxes::smooth_boxes;
 pub use fit::{fit_model, fit_scores};
@@ -67,16 +71,27 @@ pub enum TrackerKind {
     GnnOnline,
     /// SMC-PHD on boxes (global detections only: no images, so no local detectors).
     Phd,
+    /// SORT (Bewley et al. 2016), `[sort]`.
+    Sort,
+    /// ByteTrack (Zhang et al. 2022), `[bytetrack]`.
+    #[serde(rename = "bytetrack")]
+    ByteTrack,
+    /// OC-SORT (Cao et al. 2023), `[ocsort]`.
+    #[serde(rename = "ocsort")]
+    OcSort,
 }
 
 impl TrackerKind {
     /// Every tracker, in the order the command line lists them.
-    pub const ALL: [TrackerKind; 5] = [
+    pub const ALL: [TrackerKind; 8] = [
         TrackerKind::Mcmcda,
         TrackerKind::McmcdaOnline,
         TrackerKind::Gnn,
         TrackerKind::GnnOnline,
         TrackerKind::Phd,
+        TrackerKind::Sort,
+        TrackerKind::ByteTrack,
+        TrackerKind::OcSort,
     ];
 
     /// The name on the command line and in files.
@@ -87,7 +102,19 @@ impl TrackerKind {
             TrackerKind::Gnn => "gnn",
             TrackerKind::GnnOnline => "gnn-online",
             TrackerKind::Phd => "phd",
+            TrackerKind::Sort => "sort",
+            TrackerKind::ByteTrack => "bytetrack",
+            TrackerKind::OcSort => "ocsort",
         }
+    }
+
+    /// Whether this is one of the box trackers (SORT, ByteTrack, OC-SORT), which read their
+    /// own table only and follow the detections frame by frame.
+    pub fn is_sort_family(self) -> bool {
+        matches!(
+            self,
+            TrackerKind::Sort | TrackerKind::ByteTrack | TrackerKind::OcSort
+        )
     }
 }
 
@@ -358,6 +385,12 @@ pub struct TrackConfig {
     phd: Option<toml::Table>,
     #[serde(default)]
     phd_labels: PhdLabelConfig,
+    #[serde(default)]
+    sort: SortConfig,
+    #[serde(default)]
+    bytetrack: ByteTrackConfig,
+    #[serde(default)]
+    ocsort: OcSortConfig,
 }
 
 /// The effective configuration of every tracker: what runs, with every field set.
@@ -389,6 +422,12 @@ pub struct EffectiveConfig {
     pub phd: PhdConfig,
     /// The PHD tracker's track management (`[phd_labels]`).
     pub phd_labels: PhdLabelConfig,
+    /// SORT (`[sort]`).
+    pub sort: SortConfig,
+    /// ByteTrack (`[bytetrack]`).
+    pub bytetrack: ByteTrackConfig,
+    /// OC-SORT (`[ocsort]`).
+    pub ocsort: OcSortConfig,
 }
 
 impl TrackConfig {
@@ -406,10 +445,13 @@ impl TrackConfig {
 
     /// [`TrackConfig::resolve`] for one tracker: the detection-score densities (a GNN pass of
     /// their own) are fitted only for the trackers whose likelihood has a score term, so not
-    /// for the PHD (its `score_model` stays `None`, as `--print-config` shows no `[scores]`
-    /// table for it).
+    /// for the PHD or the box trackers, which read the scores as they are (their
+    /// `score_model` stays `None`, as `--print-config` shows no `[scores]` table for them).
     pub fn resolve_for(&self, rows: &[MotRow], tracker: TrackerKind) -> Result<EffectiveConfig> {
-        self.resolve_scores(rows, tracker != TrackerKind::Phd)
+        self.resolve_scores(
+            rows,
+            tracker != TrackerKind::Phd && !tracker.is_sort_family(),
+        )
     }
 
     /// The configuration `tracker` runs with on `rows`, and the detections it tracks: GNN and
@@ -484,6 +526,9 @@ impl TrackConfig {
         let phd = overridden(&phd_base, self.phd.as_ref(), "phd")?;
         phd.check().in_table("phd")?;
         self.phd_labels.check().in_table("phd_labels")?;
+        self.sort.build().in_table("sort")?;
+        self.bytetrack.build().in_table("bytetrack")?;
+        self.ocsort.build().in_table("ocsort")?;
         let mut gnn = self.gnn;
         if gnn.max_gap.is_none() && self.fit.iterations > 0 && !boxes.is_empty() {
             // GNN deletes after one box width of travel, half of MCMCDA's d̄ (the fitted one,
@@ -508,6 +553,9 @@ impl TrackConfig {
             gnn,
             phd,
             phd_labels: self.phd_labels,
+            sort: self.sort,
+            bytetrack: self.bytetrack,
+            ocsort: self.ocsort,
         })
     }
 }
@@ -528,6 +576,9 @@ pub fn track_detections(
     let (config, rows) = settings.resolve_tracked(rows, tracker)?;
     match tracker {
         TrackerKind::Phd => track_boxes_phd(&rows, &config, seed),
+        TrackerKind::Sort | TrackerKind::ByteTrack | TrackerKind::OcSort => {
+            track_sort_family(tracker, &rows, &config)
+        }
         TrackerKind::Mcmcda
         | TrackerKind::McmcdaOnline
         | TrackerKind::Gnn
@@ -584,6 +635,7 @@ pub fn track_detections_with_frames(
             crate::frames::track_frames_resolved(dir, &rows, &config, fused, seed)?
         }
         (None, TrackerKind::Phd) => track_boxes_phd(&rows, &config, seed)?,
+        (None, t) if t.is_sort_family() => track_sort_family(t, &rows, &config)?,
         (None, _) => track_points(tracker, &rows, &config, seed)?,
     };
     Ok((tracks, config))
@@ -701,6 +753,9 @@ pub fn empty_output_warning(
             config.phd.birth_rate,
             config.phd.clutter_rate
         ),
+        TrackerKind::Sort | TrackerKind::ByteTrack | TrackerKind::OcSort => {
+            sort_family::why_empty(tracker, config)
+        }
     };
     Some(format!(
         "{seen}: {why}. See the effective configuration with `cargo xtask track \
@@ -709,7 +764,7 @@ pub fn empty_output_warning(
 }
 
 /// One line of explanation per key of each table, in the order `--print-config` writes them.
-const KEY_COMMENTS: [(&str, &[(&str, &str)]); 9] = [
+const KEY_COMMENTS: [(&str, &[(&str, &str)]); 12] = [
     (
         "model",
         &[
@@ -967,6 +1022,44 @@ const KEY_COMMENTS: [(&str, &[(&str, &str)]); 9] = [
             ),
         ],
     ),
+    (
+        "sort",
+        &[
+            ("lost_track_buffer", "frames at 30 fps a track lives without a match (scaled by frame_rate)"),
+            ("frame_rate", "the video's frame rate, frames per second"),
+            ("track_activation_threshold", "the least score that starts a track"),
+            ("minimum_consecutive_frames", "matches (the first detection included) before a track is output"),
+            ("minimum_iou_threshold", "the least IoU of a match"),
+            ("state", "the Kalman state: corners, or centre-area-aspect (the paper's)"),
+        ],
+    ),
+    (
+        "bytetrack",
+        &[
+            ("lost_track_buffer", "frames at 30 fps a track lives without a match (scaled by frame_rate)"),
+            ("frame_rate", "the video's frame rate, frames per second"),
+            ("track_activation_threshold", "the least score that starts a track (from a high-score box)"),
+            ("minimum_consecutive_frames", "consecutive matches (the first detection included) before a track is confirmed"),
+            ("minimum_iou_threshold", "the least IoU of a match in the first stage (and the second unless second_iou_threshold is set)"),
+            ("high_conf_det_threshold", "boxes scoring at least this are matched first; the others only to the tracks left"),
+            ("low_conf_det_threshold", "boxes scoring below this are dropped (the paper: 0.1)"),
+            ("second_iou_threshold", "the least IoU of a second-stage match (unset: minimum_iou_threshold; the paper: 0.5)"),
+            ("state", "the Kalman state: corners, or centre-area-aspect"),
+        ],
+    ),
+    (
+        "ocsort",
+        &[
+            ("lost_track_buffer", "frames at 30 fps a track lives without a match (scaled by frame_rate)"),
+            ("frame_rate", "the video's frame rate, frames per second"),
+            ("minimum_consecutive_frames", "consecutive matches before a track is output (any match in the first frames)"),
+            ("minimum_iou_threshold", "the least IoU of a match"),
+            ("direction_consistency_weight", "the weight of the direction term in the cost (OCM)"),
+            ("high_conf_det_threshold", "boxes scoring below this are not used"),
+            ("delta_t", "frames back to the observation a direction is measured from"),
+            ("state", "the Kalman state: centre-area-aspect (the paper's), or corners"),
+        ],
+    ),
 ];
 
 /// The tables a tracker reads.
@@ -976,6 +1069,9 @@ fn tables_of(tracker: TrackerKind) -> &'static [&'static str] {
         TrackerKind::McmcdaOnline => &["model", "fit", "online", "boxes", "scores"],
         TrackerKind::Gnn | TrackerKind::GnnOnline => &["model", "fit", "gnn", "boxes", "scores"],
         TrackerKind::Phd => &["fit", "phd", "phd_labels"],
+        TrackerKind::Sort => &["sort"],
+        TrackerKind::ByteTrack => &["bytetrack"],
+        TrackerKind::OcSort => &["ocsort"],
     }
 }
 

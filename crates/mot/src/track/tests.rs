@@ -62,14 +62,7 @@ fn error_of(text: &str, tracker: TrackerKind) -> String {
 #[test]
 fn printed_configs_load_back_unchanged() {
     for rows in [walkers(), Vec::new()] {
-        for tracker in [
-            None,
-            Some(TrackerKind::Mcmcda),
-            Some(TrackerKind::McmcdaOnline),
-            Some(TrackerKind::Gnn),
-            Some(TrackerKind::GnnOnline),
-            Some(TrackerKind::Phd),
-        ] {
+        for tracker in std::iter::once(None).chain(TrackerKind::ALL.map(Some)) {
             // As `--print-config` resolves: for the tracker named, or everything.
             let resolve = |c: &TrackConfig| match tracker {
                 Some(t) => c.resolve_tracked(&rows, t).unwrap().0,
