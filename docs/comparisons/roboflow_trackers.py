@@ -11,10 +11,13 @@ MOTChallenge detection files, for the box-trackers crate.
         compares the Rust trackers with these files.
     python3 docs/comparisons/roboflow_trackers.py time DETS.txt ...
         The median over 5 runs of the time spent in `tracker.update` per frame, per tracker.
+    python3 docs/comparisons/roboflow_trackers.py time-scene N ...
+        The same on the scene of crates/box-trackers/benches/association.rs: 30 frames of N
+        walkers (the same boxes and scores, from the same formula).
 
 It creates /tmp/roboflow-trackers-venv and installs trackers==2.6.1 from PyPI the first time.
 """
-import os, subprocess, sys, time
+import math, os, subprocess, sys, time
 
 VENV = "/tmp/roboflow-trackers-venv"
 if sys.prefix != VENV:
@@ -58,13 +61,16 @@ def run(name, frames):
     for frame in range(1, max(frames) + 1):
         rows = frames.get(frame, [])
         dets = detections(rows)
+        by_box = {}
+        for r in rows:
+            by_box.setdefault(tuple(r[1]), []).append(r[0])
         start = time.perf_counter()
         result = tracker.update(dets)
         spent += time.perf_counter() - start
         for box, tid in zip(result.xyxy, result.tracker_id):
             if tid < 0:
                 continue
-            hits = [r[0] for r in rows if np.array_equal(np.array(r[1]), box)]
+            hits = by_box.get(tuple(float(v) for v in box), [])
             assert len(hits) == 1, f"frame {frame}: output box {box} is not one input box"
             out.append((frame, hits[0], int(tid)))
     return out, spent / max(frames)
@@ -83,21 +89,38 @@ def record(out_dir, paths):
             print(f"{stem} {name}: {len(rows)} rows, {ids} ids, {per_frame * 1e3:.3f} ms/frame")
 
 
-def timing(paths):
+def scene(n):
+    """The bench's scene: walkers on a grid, 1-3 px a frame, every tenth box scoring 0.4."""
+    side = math.ceil(math.sqrt(n))
+    frames = {}
+    for f in range(1, 31):
+        rows = []
+        for i in range(n):
+            row, col = i // side, i % side
+            speed = 1.0 + i % 3
+            jitter = math.sin(0.7 * f + i)
+            left, top = 40.0 * col + speed * f + jitter, 80.0 * row + jitter
+            score = 0.4 if (i + f) % 10 == 0 else 0.9
+            rows.append((i, [left, top, left + 20.0, top + 50.0], score))
+        frames[f] = rows
+    return frames
+
+
+def timing(named_frames):
     print(f"trackers {importlib.metadata.version('trackers')}, numpy {np.__version__}, supervision {sv.__version__}")
-    for path in paths:
-        frames = load(path)
+    for label, frames in named_frames:
         n = sum(len(v) for v in frames.values())
         for name in TRACKERS:
             per_frame = sorted(run(name, frames)[1] for _ in range(5))[2]
-            print(f"{os.path.basename(path)} ({n} boxes, {max(frames)} frames) {name}: "
-                  f"{per_frame * 1e3:.3f} ms/frame")
+            print(f"{label} ({n} boxes, {max(frames)} frames) {name}: {per_frame * 1e3:.3f} ms/frame")
 
 
 if __name__ == "__main__":
     if len(sys.argv) >= 4 and sys.argv[1] == "record":
         record(sys.argv[2], sys.argv[3:])
     elif len(sys.argv) >= 3 and sys.argv[1] == "time":
-        timing(sys.argv[2:])
+        timing([(os.path.basename(p), load(p)) for p in sys.argv[2:]])
+    elif len(sys.argv) >= 3 and sys.argv[1] == "time-scene":
+        timing([(f"scene {n}", scene(int(n))) for n in sys.argv[2:]])
     else:
         sys.exit(__doc__)

@@ -88,7 +88,7 @@ pub fn run(determinism_only: bool) -> Outcome {
 }
 
 /// The scenarios whose settings file `cargo xtask tune NAME --check` must reproduce.
-const TUNED_SCENARIOS: [&str; 1] = ["mot-realistic"];
+const TUNED_SCENARIOS: [&str; 2] = ["mot-realistic", "mot-box-trackers"];
 
 /// The scenarios the determinism step runs (name filters): fast ones that use rayon.
 const DETERMINISM_SCENARIOS: [&str; 3] = ["kalman", "simulator", "mot-track"];

@@ -122,7 +122,7 @@ impl OcSortTrack {
                 Box::new(move |k| std::array::from_fn(|i| last[i] + k * delta[i]))
             }
             StateLayout::CentreAreaAspect => {
-                let centre_size = |z: nalgebra::Vector4<f64>| {
+                let centre_size = |z: [f64; 4]| {
                     let w = (z[2] * z[3]).sqrt();
                     let h = if z[3] != 0.0 {
                         (z[2] / z[3]).sqrt()
@@ -142,7 +142,7 @@ impl OcSortTrack {
         };
         for i in 0..gap {
             let z = virtual_at(f64::from(i + 1));
-            self.filter.update(noise, &nalgebra::Vector4::from(z))?;
+            self.filter.update(noise, &z)?;
             if i + 1 < gap {
                 self.filter.predict(noise);
             }

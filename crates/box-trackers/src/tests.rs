@@ -32,12 +32,12 @@ fn textbook(
         f[(i, i + 4)] = 1.0;
     }
     let h = DMatrix::<f64>::identity(4, n);
-    let q = noise.q.view((0, 0), (n, n)).into_owned();
-    let r = DMatrix::from_iterator(4, 4, noise.r.iter().copied());
+    let q = DMatrix::from_diagonal(&DVector::from_column_slice(&noise.q[..n]));
+    let r = DMatrix::from_diagonal(&DVector::from_column_slice(&noise.r));
     let mut x = DVector::<f64>::zeros(n);
     let z0 = noise.layout.measure(b0);
-    x.rows_mut(0, 4).copy_from(&z0);
-    let mut p = noise.p0.view((0, 0), (n, n)).into_owned();
+    x.rows_mut(0, 4).copy_from_slice(&z0);
+    let mut p = DMatrix::from_diagonal(&DVector::from_column_slice(&noise.p0[..n]));
     for z in zs {
         x = &f * &x;
         p = &f * &p * f.transpose() + &q;
@@ -49,6 +49,27 @@ fn textbook(
         p = &ikh * &p * ikh.transpose() + &k * &r * k.transpose();
     }
     x
+}
+
+/// The textbook covariance after `steps` predictions and updates (it does not depend on the
+/// measurements).
+fn textbook_covariance(n: usize, n_moving: usize, noise: &Noise, steps: usize) -> DMatrix<f64> {
+    let mut f = DMatrix::<f64>::identity(n, n);
+    for i in 0..n_moving {
+        f[(i, i + 4)] = 1.0;
+    }
+    let h = DMatrix::<f64>::identity(4, n);
+    let q = DMatrix::from_diagonal(&DVector::from_column_slice(&noise.q[..n]));
+    let r = DMatrix::from_diagonal(&DVector::from_column_slice(&noise.r));
+    let mut p = DMatrix::from_diagonal(&DVector::from_column_slice(&noise.p0[..n]));
+    for _ in 0..steps {
+        p = &f * &p * f.transpose() + &q;
+        let s = &h * &p * h.transpose() + &r;
+        let k = &p * h.transpose() * s.try_inverse().expect("S is invertible");
+        let ikh = DMatrix::<f64>::identity(n, n) - &k * &h;
+        p = &ikh * &p * ikh.transpose() + &k * &r * k.transpose();
+    }
+    p
 }
 
 #[test]
@@ -79,12 +100,12 @@ fn the_filter_equals_the_textbook_formulas_in_both_layouts() {
     ];
     for (layout, n, n_moving, noise) in cases {
         let b0 = corners(10.0, 20.0);
-        let zs: Vec<[f64; 4]> = moves.iter().map(|b| layout.measure(b).into()).collect();
+        let zs: Vec<[f64; 4]> = moves.iter().map(|b| layout.measure(b)).collect();
         let expected = textbook(n, n_moving, &noise, &b0, &zs);
         let mut filter = BoxFilter::new(&noise, &b0);
         for z in &zs {
             filter.predict(&noise);
-            filter.update(&noise, &(*z).into()).expect("update");
+            filter.update(&noise, z).expect("update");
         }
         for i in 0..n {
             let scale = expected[i].abs().max(1.0);
@@ -94,6 +115,19 @@ fn the_filter_equals_the_textbook_formulas_in_both_layouts() {
                 filter.x[i],
                 expected[i]
             );
+        }
+        // And the covariance, entry by entry (the blocks and the zeros between them).
+        let p = textbook_covariance(n, n_moving, &noise, zs.len());
+        for i in 0..n {
+            for j in 0..n {
+                let scale = p[(i, j)].abs().max(1.0);
+                assert!(
+                    (filter.covariance(i, j) - p[(i, j)]).abs() < 1e-12 * scale,
+                    "{layout:?} P[{i}, {j}]: {} against {}",
+                    filter.covariance(i, j),
+                    p[(i, j)]
+                );
+            }
         }
         if layout == StateLayout::CentreAreaAspect {
             assert_eq!(filter.x[7], 0.0, "the unused eighth entry stays zero");

@@ -6,8 +6,6 @@
 //! `max_misses + 1` empty frames, so a gap costs at most that many frames of work, however
 //! long it is.
 
-use std::collections::BTreeMap;
-
 use tracker_model::{
     BoundingBox, Detection, DetectionId, Frame, Track, TrackId, TrackPoint, TrackSet, TrackState,
     Tracker,
@@ -107,7 +105,8 @@ pub struct BoxTracker<A> {
     association: A,
     ids: IdSource,
     previous: Option<Frame>,
-    tracks: BTreeMap<TrackId, Track>,
+    /// The confirmed tracks' output, by track number (numbers are handed out in order).
+    tracks: Vec<Track>,
 }
 
 impl<A: Association> BoxTracker<A> {
@@ -117,7 +116,7 @@ impl<A: Association> BoxTracker<A> {
             association,
             ids: IdSource::default(),
             previous: None,
-            tracks: BTreeMap::new(),
+            tracks: Vec::new(),
         }
     }
 
@@ -150,10 +149,11 @@ impl<A: Association> BoxTracker<A> {
         for (index, number) in pairs {
             let track = TrackId(number + 1);
             let bbox = boxes[index].bbox;
-            self.tracks
-                .entry(track)
-                .or_insert_with(|| Track::new(track))
-                .push(TrackPoint::boxed(frame, bbox))?;
+            while self.tracks.len() as u64 <= number {
+                let id = TrackId(self.tracks.len() as u64 + 1);
+                self.tracks.push(Track::new(id));
+            }
+            self.tracks[number as usize].push(TrackPoint::boxed(frame, bbox))?;
             out.push(Assigned {
                 track,
                 detection: detections[index].id,
@@ -182,7 +182,6 @@ impl<A: Association> Tracker for BoxTracker<A> {
 
     /// Every confirmed track's boxes, at the frames a detection was given to it.
     fn finish(&mut self) -> Result<TrackSet> {
-        let tracks = std::mem::take(&mut self.tracks);
-        Ok(TrackSet::from_tracks(tracks.into_values().collect())?)
+        Ok(TrackSet::from_tracks(std::mem::take(&mut self.tracks))?)
     }
 }

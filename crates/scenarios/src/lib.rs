@@ -369,10 +369,16 @@ fn tune_typed<P: Pipeline>(
 }
 
 /// The pipelines whose settings come from a tuning search (`cargo xtask tune`).
-const TUNERS: &[(&str, TuneFn)] = &[(
-    "mot-realistic",
-    tune_typed::<pipelines::mot_realistic::MotRealistic>,
-)];
+const TUNERS: &[(&str, TuneFn)] = &[
+    (
+        "mot-realistic",
+        tune_typed::<pipelines::mot_realistic::MotRealistic>,
+    ),
+    (
+        "mot-box-trackers",
+        tune_typed::<pipelines::mot_box_trackers::MotBoxTrackers>,
+    ),
+];
 
 /// Re-runs the tuning searches of pipeline `name` on `params` (its tuning seeds only): the
 /// settings file and the grid of every scored candidate. An error for a pipeline that tunes
@@ -413,6 +419,10 @@ const PIPELINES: &[(&str, RunFn)] = &[
     ("mcmcda-batch", run_typed::<pipelines::mcmcda::Batch>),
     ("mcmcda-online", run_typed::<pipelines::mcmcda::Online>),
     ("mcmcda-sweep", run_typed::<pipelines::mcmcda::Sweep>),
+    (
+        "mot-box-trackers",
+        run_typed::<pipelines::mot_box_trackers::MotBoxTrackers>,
+    ),
     ("mot-eval", run_typed::<pipelines::mot_eval::MotEval>),
     ("mot-track", run_typed::<pipelines::mot_track::MotTrack>),
     (

@@ -8,6 +8,7 @@ pub mod gdt;
 pub mod hmm;
 pub mod kalman;
 pub mod mcmcda;
+pub mod mot_box_trackers;
 pub mod mot_eval;
 pub mod mot_realistic;
 pub mod mot_track;

@@ -37,13 +37,13 @@ pub struct MotRealistic;
 #[serde(deny_unknown_fields)]
 pub struct SequenceSpec {
     /// Its name (as the peer script's files are named).
-    name: String,
+    pub(crate) name: String,
     /// Generator seed.
-    seed: u64,
+    pub(crate) seed: u64,
     /// Frames per second.
-    fps: f64,
+    pub(crate) fps: f64,
     /// Length, seconds.
-    seconds: f64,
+    pub(crate) seconds: f64,
 }
 
 /// One recorded row of the peer script.
@@ -68,11 +68,11 @@ pub struct PeerRow {
 #[serde(deny_unknown_fields)]
 pub struct TunedSetting {
     /// Dotted key of a `cargo xtask track --config` file (e.g. `offline.link_gap_factor`).
-    key: String,
+    pub(crate) key: String,
     /// Candidates, in the order they are tried.
-    values: Vec<toml::Value>,
+    pub(crate) values: Vec<toml::Value>,
     /// The trackers the setting changes.
-    trackers: Vec<TrackerKind>,
+    pub(crate) trackers: Vec<TrackerKind>,
 }
 
 /// The tuning search of `cargo xtask tune mot-realistic`.
@@ -80,11 +80,11 @@ pub struct TunedSetting {
 #[serde(deny_unknown_fields)]
 pub struct Tuning {
     /// The tuning sequences (the only ones the search runs).
-    sequences: Vec<SequenceSpec>,
+    pub(crate) sequences: Vec<SequenceSpec>,
     /// Rounds of the coordinate search, at most.
-    max_rounds: usize,
+    pub(crate) max_rounds: usize,
     /// The settings, searched in this order.
-    settings: Vec<TunedSetting>,
+    pub(crate) settings: Vec<TunedSetting>,
 }
 
 /// Its parameters.
@@ -108,25 +108,27 @@ pub struct Params {
     peer: Vec<PeerRow>,
 }
 
-/// MOTA or IDF1.
+/// MOTA, IDF1 or HOTA.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Measure {
+pub(crate) enum Measure {
     Mota,
     Idf1,
+    Hota,
 }
 
 impl Measure {
-    fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Measure::Mota => "MOTA",
             Measure::Idf1 => "IDF1",
+            Measure::Hota => "HOTA",
         }
     }
 }
 
 /// Who an ordering compares against.
 #[derive(Debug, Clone, Copy)]
-enum Against {
+pub(crate) enum Against {
     /// One of our trackers.
     Ours(TrackerKind),
     /// A Stone Soup tracker's output: (tracker, output) of [`PeerRow`].
@@ -136,12 +138,12 @@ enum Against {
 /// "ours's measure ≥ against's − margin", per sequence, judged by a paired interval. Each
 /// compares like with like: offline (smoothed over the file) with offline smoothed, online
 /// (causal, coasting) with online.
-struct Ordering {
-    key: &'static str,
-    measure: Measure,
-    ours: TrackerKind,
-    against: Against,
-    margin: f64,
+pub(crate) struct Ordering {
+    pub(crate) key: &'static str,
+    pub(crate) measure: Measure,
+    pub(crate) ours: TrackerKind,
+    pub(crate) against: Against,
+    pub(crate) margin: f64,
 }
 
 /// Every ordering the scenario states, fixed with its margin before the fresh sequences ran.
@@ -218,7 +220,7 @@ const ORDERINGS: [Ordering; 10] = [
     ),
 ];
 
-const fn ordering(
+pub(crate) const fn ordering(
     key: &'static str,
     measure: Measure,
     ours: TrackerKind,
@@ -235,7 +237,7 @@ const fn ordering(
 }
 
 impl Ordering {
-    fn statement(&self) -> String {
+    pub(crate) fn statement(&self) -> String {
         let against = match self.against {
             Against::Ours(t) => format!("our {t}"),
             Against::Peer(t, o) => format!("Stone Soup's {t} ({o})"),
@@ -256,22 +258,24 @@ impl Ordering {
 /// One tracker on one sequence.
 #[derive(Debug, Clone)]
 pub struct Score {
-    tracker: TrackerKind,
-    sequence: usize,
-    mota: f64,
-    idf1: f64,
-    idsw: f64,
-    false_positives: usize,
-    false_negatives: usize,
-    tracks: usize,
-    ms_per_frame: f64,
+    pub(crate) tracker: TrackerKind,
+    pub(crate) sequence: usize,
+    pub(crate) mota: f64,
+    pub(crate) idf1: f64,
+    pub(crate) hota: f64,
+    pub(crate) idsw: f64,
+    pub(crate) false_positives: usize,
+    pub(crate) false_negatives: usize,
+    pub(crate) tracks: usize,
+    pub(crate) ms_per_frame: f64,
 }
 
 impl Score {
-    fn of(&self, m: Measure) -> f64 {
+    pub(crate) fn of(&self, m: Measure) -> f64 {
         match m {
             Measure::Mota => self.mota,
             Measure::Idf1 => self.idf1,
+            Measure::Hota => self.hota,
         }
     }
 }
@@ -279,11 +283,11 @@ impl Score {
 /// Every score on one set of sequences.
 pub struct SetScores {
     /// "reported" or "fresh".
-    name: &'static str,
-    specs: Vec<SequenceSpec>,
-    frames: Vec<u32>,
-    truth_boxes: Vec<usize>,
-    scores: Vec<Score>,
+    pub(crate) name: &'static str,
+    pub(crate) specs: Vec<SequenceSpec>,
+    pub(crate) frames: Vec<u32>,
+    pub(crate) truth_boxes: Vec<usize>,
+    pub(crate) scores: Vec<Score>,
 }
 
 /// Both sets.
@@ -294,12 +298,12 @@ pub struct Output {
 }
 
 impl SetScores {
-    fn of(&self, tracker: TrackerKind) -> impl Iterator<Item = &Score> {
+    pub(crate) fn of(&self, tracker: TrackerKind) -> impl Iterator<Item = &Score> {
         self.scores.iter().filter(move |s| s.tracker == tracker)
     }
 
     /// One of our trackers' measure on each sequence, in sequence order.
-    fn ours(&self, tracker: TrackerKind, m: Measure) -> Vec<f64> {
+    pub(crate) fn ours(&self, tracker: TrackerKind, m: Measure) -> Vec<f64> {
         let mut v = vec![f64::NAN; self.specs.len()];
         for s in self.of(tracker) {
             v[s.sequence] = s.of(m);
@@ -330,6 +334,8 @@ impl SetScores {
                     r.map_or(f64::NAN, |r| match m {
                         Measure::Mota => r.mota,
                         Measure::Idf1 => r.idf1,
+                        // The peer script records no HOTA.
+                        Measure::Hota => f64::NAN,
                     })
                 })
                 .collect(),
@@ -337,14 +343,14 @@ impl SetScores {
     }
 
     /// The paired interval of an ordering on this set.
-    fn paired(&self, peer: &[PeerRow], o: &Ordering) -> Paired {
+    pub(crate) fn paired(&self, peer: &[PeerRow], o: &Ordering) -> Paired {
         Paired::of(
             &self.ours(o.ours, o.measure),
             &self.against(peer, o.against, o.measure),
         )
     }
 
-    fn mean(&self, tracker: TrackerKind, m: Measure) -> (f64, f64) {
+    pub(crate) fn mean(&self, tracker: TrackerKind, m: Measure) -> (f64, f64) {
         mean_ci(self.of(tracker).map(|s| s.of(m)))
     }
 }
@@ -409,7 +415,7 @@ fn check_orderings(p: &Params) -> Result<()> {
 }
 
 /// The sequences and their truth.
-fn generate(specs: &[SequenceSpec]) -> Result<(Vec<Sequence>, Vec<TrackSet>)> {
+pub(crate) fn generate(specs: &[SequenceSpec]) -> Result<(Vec<Sequence>, Vec<TrackSet>)> {
     let seqs = specs
         .iter()
         .map(|s| {
@@ -429,16 +435,16 @@ fn generate(specs: &[SequenceSpec]) -> Result<(Vec<Sequence>, Vec<TrackSet>)> {
 }
 
 /// Every tracker on every sequence of one set.
-fn score_set(
+pub(crate) fn score_set(
     name: &'static str,
     specs: &[SequenceSpec],
-    p: &Params,
+    trackers: &[TrackerKind],
     config: &TrackConfig,
     env: &Env<'_>,
 ) -> Result<SetScores> {
     let (seqs, gts) = generate(specs)?;
     let jobs: Vec<(usize, TrackerKind)> = (0..seqs.len())
-        .flat_map(|i| p.trackers.iter().map(move |&t| (i, t)))
+        .flat_map(|i| trackers.iter().map(move |&t| (i, t)))
         .collect();
     let scores = jobs
         .par_iter()
@@ -453,6 +459,7 @@ fn score_set(
                 sequence: i,
                 mota: report.clear.mota,
                 idf1: report.identity.idf1,
+                hota: report.hota.hota,
                 idsw: report.clear.id_switches as f64,
                 false_positives: report.clear.false_positives,
                 false_negatives: report.clear.false_negatives,
@@ -471,7 +478,7 @@ fn score_set(
 }
 
 /// A settings table as a tracker configuration.
-fn track_config(settings: &toml::Table) -> Result<TrackConfig> {
+pub(crate) fn track_config(settings: &toml::Table) -> Result<TrackConfig> {
     toml::Value::Table(settings.clone())
         .try_into()
         .context("the tuned settings are not a `cargo xtask track --config` file")
@@ -481,7 +488,7 @@ fn track_config(settings: &toml::Table) -> Result<TrackConfig> {
 /// tuning sequences of the trackers the setting changes (cached by settings and tracker, so
 /// a candidate already run costs nothing).
 struct TuningScore<'a> {
-    p: &'a Params,
+    tuning: &'a Tuning,
     seqs: Vec<Sequence>,
     gts: Vec<TrackSet>,
     cache: HashMap<(String, &'static str), f64>,
@@ -490,7 +497,7 @@ struct TuningScore<'a> {
 
 impl TuningScore<'_> {
     fn score(&mut self, settings: &toml::Table, setting: usize) -> Result<f64> {
-        let trackers = &self.p.tuning.settings[setting].trackers;
+        let trackers = &self.tuning.settings[setting].trackers;
         let key = toml::to_string(settings)?;
         let config = track_config(settings)?;
         let mut sum = 0.0;
@@ -515,6 +522,40 @@ impl TuningScore<'_> {
         }
         Ok(sum / trackers.len().max(1) as f64)
     }
+}
+
+/// The coordinate search of `tuning` on its sequences, as a settings file with `header` and
+/// the grid of every scored candidate.
+pub(crate) fn search(tuning: &Tuning, header: &str, env: &Env<'_>) -> Result<Tuned> {
+    let coordinates: Vec<Coordinate> = tuning
+        .settings
+        .iter()
+        .map(|s| Coordinate {
+            key: s.key.clone(),
+            values: s.values.clone(),
+        })
+        .collect();
+    let (seqs, gts) = generate(&tuning.sequences)?;
+    let mut scorer = TuningScore {
+        tuning,
+        seqs,
+        gts,
+        cache: HashMap::new(),
+        env,
+    };
+    let log = |line: &str| env.developer.say(line);
+    let (settings, grid) = coordinate_search(
+        &toml::Table::new(),
+        &coordinates,
+        tuning.max_rounds,
+        |settings, i| scorer.score(settings, i),
+        &log,
+    )?;
+    track_config(&settings)?.resolve(&[])?;
+    Ok(Tuned {
+        settings: settings_file(header, &settings)?,
+        grid: grid_csv(&grid),
+    })
 }
 
 /// The settings file's header.
@@ -548,8 +589,8 @@ impl Pipeline for MotRealistic {
             toml::from_str(&text).with_context(|| format!("reading {}", p.tuned))?;
         let n = (p.sequences.len() + p.fresh_sequences.len()) * p.trackers.len();
         env.progress.set_length(n as u64);
-        let reported = score_set("reported", &p.sequences, p, &config, env)?;
-        let fresh = score_set("fresh", &p.fresh_sequences, p, &config, env)?;
+        let reported = score_set("reported", &p.sequences, &p.trackers, &config, env)?;
+        let fresh = score_set("fresh", &p.fresh_sequences, &p.trackers, &config, env)?;
         Ok(Output {
             params: p.clone(),
             sets: [reported, fresh],
@@ -558,36 +599,7 @@ impl Pipeline for MotRealistic {
 
     fn tune(p: &Params, env: &Env<'_>) -> Result<Option<Tuned>> {
         check_seeds(p)?;
-        let coordinates: Vec<Coordinate> = p
-            .tuning
-            .settings
-            .iter()
-            .map(|s| Coordinate {
-                key: s.key.clone(),
-                values: s.values.clone(),
-            })
-            .collect();
-        let (seqs, gts) = generate(&p.tuning.sequences)?;
-        let mut scorer = TuningScore {
-            p,
-            seqs,
-            gts,
-            cache: HashMap::new(),
-            env,
-        };
-        let log = |line: &str| env.developer.say(line);
-        let (settings, grid) = coordinate_search(
-            &toml::Table::new(),
-            &coordinates,
-            p.tuning.max_rounds,
-            |settings, i| scorer.score(settings, i),
-            &log,
-        )?;
-        track_config(&settings)?.resolve(&[])?;
-        Ok(Some(Tuned {
-            settings: settings_file(&tuned_header(p), &settings)?,
-            grid: grid_csv(&grid),
-        }))
+        Ok(Some(search(&p.tuning, &tuned_header(p), env)?))
     }
 
     fn metrics(out: &Output) -> Metrics {
@@ -702,7 +714,7 @@ impl Pipeline for MotRealistic {
 }
 
 /// "mean ± half-width" of a (mean, 95 % half-width) pair.
-fn pm((m, h): (f64, f64)) -> String {
+pub(crate) fn pm((m, h): (f64, f64)) -> String {
     format!("{} ± {}", fmt_num(m), fmt_num(h))
 }
 
