@@ -39,7 +39,8 @@ impl ByteTrackConfig {
             checked: self.checked()?,
             tracks: Vec::new(),
             predicted: Vec::new(),
-        }))
+        })
+        .coasting(self.coast_frames))
     }
 }
 
@@ -144,5 +145,13 @@ impl Association for ByteTrack {
             t.misses <= max_misses && (mature || t.misses == 0)
         });
         Ok(out)
+    }
+    fn coasting(&self, max: u32) -> Vec<(u64, Corners)> {
+        let layout = self.checked.noise.layout;
+        self.tracks
+            .iter()
+            .filter(|t| (1..=max).contains(&t.misses))
+            .filter_map(|t| Some((t.number?, t.filter.corners(layout))))
+            .collect()
     }
 }

@@ -50,6 +50,20 @@ fn ensure_threshold(value: f64, name: &'static str) -> Result<f64> {
     Ok(ensure_in_range(value, 0.0, 1.0, name)?)
 }
 
+/// The largest `coast_frames`.
+pub const MAX_COAST_FRAMES: u32 = 1_000;
+
+fn ensure_coast(value: u32) -> Result<u32> {
+    if value > MAX_COAST_FRAMES {
+        return Err(invalid(
+            "coast_frames",
+            format!("{value} is above the limit of {MAX_COAST_FRAMES}: each is a box per track"),
+        )
+        .into());
+    }
+    Ok(value)
+}
+
 fn ensure_consecutive(value: u32) -> Result<u32> {
     if value > MAX_CONSECUTIVE_FRAMES {
         return Err(invalid(
@@ -87,6 +101,9 @@ pub struct SortConfig {
     pub minimum_consecutive_frames: u32,
     /// The least IoU of a match.
     pub minimum_iou_threshold: f64,
+    /// Frames a confirmed track is output at its predicted box after a miss (0, the
+    /// reference's way: only the detections given to tracks are output).
+    pub coast_frames: u32,
     /// The Kalman state.
     pub state: StateLayout,
 }
@@ -99,6 +116,7 @@ impl Default for SortConfig {
             track_activation_threshold: 0.25,
             minimum_consecutive_frames: 3,
             minimum_iou_threshold: 0.3,
+            coast_frames: 0,
             state: StateLayout::Corners,
         }
     }
@@ -112,6 +130,7 @@ impl SortConfig {
         )?;
         ensure_threshold(self.minimum_iou_threshold, "minimum_iou_threshold")?;
         ensure_consecutive(self.minimum_consecutive_frames)?;
+        ensure_coast(self.coast_frames)?;
         Ok(Checked {
             noise: paper_noise(self.state, 0.1, 0.01, 1.0),
             max_misses: max_misses(self.lost_track_buffer, self.frame_rate)?,
@@ -147,6 +166,9 @@ pub struct ByteTrackConfig {
     pub low_conf_det_threshold: f64,
     /// The least IoU of a second-stage match, when it differs from the first stage's.
     pub second_iou_threshold: Option<f64>,
+    /// Frames a confirmed track is output at its predicted box after a miss (0, the
+    /// reference's way: only the detections given to tracks are output).
+    pub coast_frames: u32,
     /// The Kalman state.
     pub state: StateLayout,
 }
@@ -162,6 +184,7 @@ impl Default for ByteTrackConfig {
             high_conf_det_threshold: 0.6,
             low_conf_det_threshold: 0.0,
             second_iou_threshold: None,
+            coast_frames: 0,
             state: StateLayout::Corners,
         }
     }
@@ -190,6 +213,7 @@ impl ByteTrackConfig {
             .into());
         }
         ensure_consecutive(self.minimum_consecutive_frames)?;
+        ensure_coast(self.coast_frames)?;
         // The reference scales its identity matrices the same way in either layout.
         let noise = Noise::diagonal(self.state, [0.01; 8], [0.1; 4], [1.0; 8]);
         Ok(Checked {
@@ -220,6 +244,9 @@ pub struct OcSortConfig {
     pub high_conf_det_threshold: f64,
     /// Frames back to the observation the direction is measured from (paper's Δt).
     pub delta_t: u32,
+    /// Frames a confirmed track is output at its predicted box after a miss (0, the
+    /// reference's way: only the detections given to tracks are output).
+    pub coast_frames: u32,
     /// The Kalman state.
     pub state: StateLayout,
 }
@@ -234,6 +261,7 @@ impl Default for OcSortConfig {
             direction_consistency_weight: 0.2,
             high_conf_det_threshold: 0.6,
             delta_t: 3,
+            coast_frames: 0,
             state: StateLayout::CentreAreaAspect,
         }
     }
@@ -250,6 +278,7 @@ impl OcSortConfig {
             "direction_consistency_weight",
         )?;
         ensure_consecutive(self.minimum_consecutive_frames)?;
+        ensure_coast(self.coast_frames)?;
         if self.delta_t == 0 || self.delta_t > MAX_DELTA_T {
             return Err(invalid(
                 "delta_t",

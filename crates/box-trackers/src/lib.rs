@@ -48,8 +48,8 @@ mod tests;
 pub use associate::{Matching, Matrix, assign, iou};
 pub use bytetrack::{ByteTrack, ByteTrackTracker};
 pub use config::{
-    ByteTrackConfig, MAX_CONSECUTIVE_FRAMES, MAX_DELTA_T, MAX_FRAME_RATE, MAX_LOST_TRACK_BUFFER,
-    OcSortConfig, SortConfig,
+    ByteTrackConfig, MAX_COAST_FRAMES, MAX_CONSECUTIVE_FRAMES, MAX_DELTA_T, MAX_FRAME_RATE,
+    MAX_LOST_TRACK_BUFFER, OcSortConfig, SortConfig,
 };
 pub use error::{Error, Result};
 pub use kalman::{Corners, StateLayout};

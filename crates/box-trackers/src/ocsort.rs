@@ -170,7 +170,8 @@ impl OcSortConfig {
             checked: self.checked()?,
             tracks: Vec::new(),
             frame_count: 0,
-        }))
+        })
+        .coasting(self.coast_frames))
     }
 }
 
@@ -312,5 +313,13 @@ impl Association for OcSort {
         self.tracks.retain(|t| t.misses <= max_misses);
         self.frame_count += 1;
         Ok(out)
+    }
+    fn coasting(&self, max: u32) -> Vec<(u64, Corners)> {
+        let layout = self.checked.noise.layout;
+        self.tracks
+            .iter()
+            .filter(|t| (1..=max).contains(&t.misses))
+            .filter_map(|t| Some((t.number?, t.filter.corners(layout))))
+            .collect()
     }
 }

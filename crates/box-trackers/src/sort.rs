@@ -37,7 +37,8 @@ impl SortConfig {
             config: *self,
             checked: self.checked()?,
             tracks: Vec::new(),
-        }))
+        })
+        .coasting(self.coast_frames))
     }
 }
 
@@ -106,5 +107,13 @@ impl Association for Sort {
         self.tracks
             .retain(|t| t.misses <= max_misses && (t.hits >= min_hits || t.misses == 0));
         Ok(out)
+    }
+    fn coasting(&self, max: u32) -> Vec<(u64, Corners)> {
+        let layout = self.checked.noise.layout;
+        self.tracks
+            .iter()
+            .filter(|t| (1..=max).contains(&t.misses))
+            .filter_map(|t| Some((t.number?, t.filter.corners(layout))))
+            .collect()
     }
 }

@@ -416,3 +416,37 @@ fn frame_rate_scales_the_buffer_as_the_reference_does() {
     assert_eq!(misses(0, 30.0), 0);
     assert_eq!(misses(1, 1.0), 1);
 }
+
+#[test]
+fn coasting_outputs_confirmed_tracks_at_their_prediction_through_a_gap() {
+    let config = SortConfig {
+        coast_frames: 2,
+        minimum_consecutive_frames: 2,
+        ..SortConfig::default()
+    };
+    let mut t = config.build().expect("valid");
+    t.step(1, &[det(1, 1, 100.0, 50.0, 0.9)]).expect("step");
+    assert_eq!(ids(&t.step(2, &[det(2, 2, 104.0, 50.0, 0.9)]).expect("step")), vec![1]);
+    // Frame 3 without it: output at the prediction, which is the filter's box after the miss.
+    let states = t.step(3, &[]).expect("step");
+    assert_eq!(ids(&states), vec![1]);
+    let predicted = t.association().boxes()[0];
+    let tracker_model::Location::Box(b) = states[0].point.location else {
+        panic!("a box");
+    };
+    assert_eq!([b.left, b.top, b.right(), b.bottom()], predicted);
+    assert!(b.left > 104.0, "it moves on: {}", b.left);
+    // Frames 4 and 5 are a gap (replayed): frame 4 is the second miss, output; frame 5 the
+    // third, not output; at frame 6 it is found again.
+    assert_eq!(ids(&t.step(6, &[det(6, 6, 120.0, 50.0, 0.9)]).expect("step")), vec![1]);
+    let tracks = t.finish().expect("finish");
+    let frames: Vec<u32> = tracks.tracks()[0].points().iter().map(|p| p.frame).collect();
+    assert_eq!(frames, vec![2, 3, 4, 6]);
+    // Without coasting (the reference's way) only the detections are output.
+    let mut t = SortConfig::default().build().expect("defaults");
+    for f in 1..=3 {
+        t.step(f, &[det(f.into(), f, 100.0 + 4.0 * f64::from(f), 50.0, 0.9)]).expect("step");
+    }
+    assert!(t.step(4, &[]).expect("step").is_empty());
+    assert!(SortConfig { coast_frames: MAX_COAST_FRAMES + 1, ..SortConfig::default() }.build().is_err());
+}

@@ -83,6 +83,10 @@ pub trait Association {
         detections: &[BoxDetection],
         ids: &mut IdSource,
     ) -> Result<Vec<(usize, u64)>>;
+
+    /// The confirmed tracks missed for 1 to `max` frames now, as (track number, predicted
+    /// box).
+    fn coasting(&self, max: u32) -> Vec<(u64, Corners)>;
 }
 
 /// A detection given to a confirmed track at a step.
@@ -103,6 +107,9 @@ pub struct Assigned {
 #[derive(Debug, Clone)]
 pub struct BoxTracker<A> {
     association: A,
+    /// Frames a confirmed track is output at its prediction after a miss (0: only the
+    /// detections given to tracks, as the reference).
+    coast_frames: u32,
     ids: IdSource,
     previous: Option<Frame>,
     /// The confirmed tracks' output, by track number (numbers are handed out in order).
@@ -114,10 +121,19 @@ impl<A: Association> BoxTracker<A> {
     pub fn new(association: A) -> Self {
         Self {
             association,
+            coast_frames: 0,
             ids: IdSource::default(),
             previous: None,
             tracks: Vec::new(),
         }
+    }
+
+    /// The same tracker, outputting each confirmed track at its predicted box for up to
+    /// `frames` frames after a miss (see the configs' `coast_frames`).
+    #[must_use]
+    pub fn coasting(mut self, frames: u32) -> Self {
+        self.coast_frames = frames;
+        self
     }
 
     /// The association (its settings and live tracks).
@@ -126,7 +142,7 @@ impl<A: Association> BoxTracker<A> {
     }
 
     /// Steps to `frame` with its detections and returns those given to confirmed tracks, in
-    /// the association's order.
+    /// the association's order (the coasted tracks are [`BoxTracker::coasted`]).
     pub fn update(&mut self, frame: Frame, detections: &[Detection]) -> Result<Vec<Assigned>> {
         let boxes = detections
             .iter()
@@ -136,11 +152,12 @@ impl<A: Association> BoxTracker<A> {
             if frame <= previous {
                 return Err(Error::FramesOutOfOrder { frame, previous });
             }
-            for _ in previous + 1..frame {
+            for empty in previous + 1..frame {
                 if !self.association.has_tracks() {
                     break;
                 }
                 self.association.associate(&[], &mut self.ids)?;
+                self.record_coasted(empty)?;
             }
         }
         self.previous = Some(frame);
@@ -149,11 +166,7 @@ impl<A: Association> BoxTracker<A> {
         for (index, number) in pairs {
             let track = TrackId(number + 1);
             let bbox = boxes[index].bbox;
-            while self.tracks.len() as u64 <= number {
-                let id = TrackId(self.tracks.len() as u64 + 1);
-                self.tracks.push(Track::new(id));
-            }
-            self.tracks[number as usize].push(TrackPoint::boxed(frame, bbox))?;
+            self.record(number, frame, bbox)?;
             out.push(Assigned {
                 track,
                 detection: detections[index].id,
@@ -161,21 +174,58 @@ impl<A: Association> BoxTracker<A> {
                 bbox,
             });
         }
+        self.record_coasted(frame)?;
         Ok(out)
+    }
+
+    /// The confirmed tracks output at their predictions now (none unless coasting is on):
+    /// (track, box), boxes that are no longer a valid box (a diverged prediction) left out.
+    pub fn coasted(&self) -> Vec<(TrackId, BoundingBox)> {
+        if self.coast_frames == 0 {
+            return Vec::new();
+        }
+        let mut out: Vec<(TrackId, BoundingBox)> = self
+            .association
+            .coasting(self.coast_frames)
+            .into_iter()
+            .filter_map(|(number, c)| {
+                let b = BoundingBox::new(c[0], c[1], c[2] - c[0], c[3] - c[1]).ok()?;
+                Some((TrackId(number + 1), b))
+            })
+            .collect();
+        out.sort_by_key(|(id, _)| *id);
+        out
+    }
+
+    fn record_coasted(&mut self, frame: Frame) -> Result<()> {
+        for (track, bbox) in self.coasted() {
+            self.record(track.0 - 1, frame, bbox)?;
+        }
+        Ok(())
+    }
+
+    fn record(&mut self, number: u64, frame: Frame, bbox: BoundingBox) -> Result<()> {
+        while self.tracks.len() as u64 <= number {
+            let id = TrackId(self.tracks.len() as u64 + 1);
+            self.tracks.push(Track::new(id));
+        }
+        Ok(self.tracks[number as usize].push(TrackPoint::boxed(frame, bbox))?)
     }
 }
 
 impl<A: Association> Tracker for BoxTracker<A> {
     type Error = Error;
 
-    /// [`BoxTracker::update`]: each confirmed track given a detection, at the detection's box.
+    /// [`BoxTracker::update`]: each confirmed track given a detection, at the detection's box,
+    /// then the coasted ones at their predictions.
     fn step(&mut self, frame: Frame, detections: &[Detection]) -> Result<Vec<TrackState>> {
-        Ok(self
-            .update(frame, detections)?
-            .into_iter()
-            .map(|a| TrackState {
-                id: a.track,
-                point: TrackPoint::boxed(frame, a.bbox),
+        let assigned = self.update(frame, detections)?;
+        let states = assigned.into_iter().map(|a| (a.track, a.bbox));
+        Ok(states
+            .chain(self.coasted())
+            .map(|(id, bbox)| TrackState {
+                id,
+                point: TrackPoint::boxed(frame, bbox),
             })
             .collect())
     }

@@ -21,7 +21,9 @@ const FILES: [&str; 4] = [
 ];
 
 fn testdata(name: &str) -> std::path::PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("testdata").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("testdata")
+        .join(name)
 }
 
 /// The file's detections by frame, each with its 0-based row as id and the file's score.
@@ -42,7 +44,10 @@ fn reference(name: &str, tracker: &str) -> BTreeMap<(Frame, u64), u64> {
     let text = std::fs::read_to_string(path).expect("recorded reference output");
     text.lines()
         .map(|line| {
-            let v: Vec<u64> = line.split(',').map(|s| s.parse().expect("a number")).collect();
+            let v: Vec<u64> = line
+                .split(',')
+                .map(|s| s.parse().expect("a number"))
+                .collect();
             ((v[0] as Frame, v[1]), v[2])
         })
         .collect()
@@ -55,7 +60,11 @@ fn ours(
     let mut out = BTreeMap::new();
     for (&frame, detections) in scans {
         for a in step(frame, detections) {
-            assert_eq!(Some(a.bbox), detections[a.index].bbox(), "the detection's own box");
+            assert_eq!(
+                Some(a.bbox),
+                detections[a.index].bbox(),
+                "the detection's own box"
+            );
             out.insert((frame, a.detection.0), a.track.0);
         }
     }
@@ -65,7 +74,8 @@ fn ours(
 /// The same rows, and one id of ours for each id of the reference and back.
 fn check(name: &str, tracker: &str, got: &BTreeMap<(Frame, u64), u64>) {
     let want = reference(name, tracker);
-    let (got_rows, want_rows): (BTreeSet<_>, BTreeSet<_>) = (got.keys().collect(), want.keys().collect());
+    let (got_rows, want_rows): (BTreeSet<_>, BTreeSet<_>) =
+        (got.keys().collect(), want.keys().collect());
     let missing: Vec<_> = want_rows.difference(&got_rows).take(5).collect();
     let extra: Vec<_> = got_rows.difference(&want_rows).take(5).collect();
     assert!(
@@ -77,8 +87,16 @@ fn check(name: &str, tracker: &str, got: &BTreeMap<(Frame, u64), u64>) {
     let (mut forward, mut backward) = (HashMap::new(), HashMap::new());
     for (key, &theirs) in &want {
         let mine = got[key];
-        assert_eq!(*forward.entry(theirs).or_insert(mine), mine, "{name} {tracker}: id {theirs} at {key:?}");
-        assert_eq!(*backward.entry(mine).or_insert(theirs), theirs, "{name} {tracker}: our id {mine} at {key:?}");
+        assert_eq!(
+            *forward.entry(theirs).or_insert(mine),
+            mine,
+            "{name} {tracker}: id {theirs} at {key:?}"
+        );
+        assert_eq!(
+            *backward.entry(mine).or_insert(theirs),
+            theirs,
+            "{name} {tracker}: our id {mine} at {key:?}"
+        );
     }
     assert!(!want.is_empty());
 }
