@@ -104,3 +104,143 @@ pub fn assign(score: &Matrix, gate: &Matrix, threshold: f64) -> Result<Matching>
         unmatched_cols: free(col_free),
     })
 }
+
+/// The maximum-IoU assignment of `rows` to `cols` gated at `threshold` (SORT's and
+/// ByteTrack's): [`assign_overlapping`] for a positive gate, else the dense problem (a zero
+/// gate passes the pairs that do not overlap, which only the dense solve decides as the
+/// reference does).
+pub fn assign_iou(rows: &[Corners], cols: &[Corners], threshold: f64) -> Result<Matching> {
+    if (threshold as f32) > 0.0 {
+        return assign_overlapping(rows, cols, threshold);
+    }
+    let iou = Matrix::iou(rows, cols);
+    assign(&iou, &iou, threshold)
+}
+
+/// [`assign`] on an IoU matrix gated on itself at `threshold` > 0, without forming the dense
+/// problem: the pairs that overlap at all split the tracks and boxes into connected groups,
+/// and each group is assigned on its own (a single pair directly, a larger group by the same
+/// solver on its submatrix). Zero entries add nothing to an assignment's weight and fail any
+/// positive gate, so wherever the maximum-weight assignment is unique (exactly tied IoUs
+/// aside) the matches are those of the dense problem; the tests compare the two on random
+/// scenes. Cost: a sort and the overlapping pairs, instead of a dense n × m solve.
+pub fn assign_overlapping(rows: &[Corners], cols: &[Corners], threshold: f64) -> Result<Matching> {
+    let pairs = overlapping_pairs(rows, cols);
+    let mut groups = Groups::new(rows.len() + cols.len());
+    for &(r, c, _) in &pairs {
+        groups.join(r, rows.len() + c);
+    }
+    let mut members: std::collections::BTreeMap<usize, (Vec<usize>, Vec<usize>)> =
+        std::collections::BTreeMap::new();
+    for &(r, c, _) in &pairs {
+        let g = members.entry(groups.root(r)).or_default();
+        g.0.push(r);
+        g.1.push(c);
+    }
+    let gate = threshold as f32;
+    let mut matched = Vec::new();
+    for (_, (mut group_rows, mut group_cols)) in members {
+        group_rows.sort_unstable();
+        group_rows.dedup();
+        group_cols.sort_unstable();
+        group_cols.dedup();
+        let sub = Matrix {
+            n_rows: group_rows.len(),
+            n_cols: group_cols.len(),
+            values: group_rows
+                .iter()
+                .flat_map(|&r| group_cols.iter().map(move |&c| iou(&rows[r], &cols[c])))
+                .collect(),
+        };
+        if sub.values.len() == 1 {
+            if sub.values[0] >= gate {
+                matched.push((group_rows[0], group_cols[0]));
+            }
+            continue;
+        }
+        let m = assign(&sub, &sub, threshold)?;
+        matched.extend(
+            m.matched
+                .iter()
+                .map(|&(r, c)| (group_rows[r], group_cols[c])),
+        );
+    }
+    matched.sort_unstable();
+    let mut row_free = vec![true; rows.len()];
+    let mut col_free = vec![true; cols.len()];
+    for &(r, c) in &matched {
+        row_free[r] = false;
+        col_free[c] = false;
+    }
+    let free = |flags: Vec<bool>| -> Vec<usize> {
+        flags
+            .into_iter()
+            .enumerate()
+            .filter_map(|(i, f)| f.then_some(i))
+            .collect()
+    };
+    Ok(Matching {
+        matched,
+        unmatched_rows: free(row_free),
+        unmatched_cols: free(col_free),
+    })
+}
+
+/// Every (row, col, IoU) with IoU > 0, found by sweeping the columns sorted by left edge:
+/// a row can only overlap the columns whose left edge lies within (its left − the widest
+/// column, its right).
+fn overlapping_pairs(rows: &[Corners], cols: &[Corners]) -> Vec<(usize, usize, f32)> {
+    let mut order: Vec<usize> = (0..cols.len())
+        .filter(|&c| cols[c].iter().all(|v| v.is_finite()))
+        .collect();
+    order.sort_by(|&a, &b| cols[a][0].total_cmp(&cols[b][0]));
+    let widest = order
+        .iter()
+        .map(|&c| cols[c][2] - cols[c][0])
+        .fold(0.0, f64::max);
+    let lefts: Vec<f64> = order.iter().map(|&c| cols[c][0]).collect();
+    let mut pairs = Vec::new();
+    for (r, row) in rows.iter().enumerate() {
+        if !row.iter().all(|v| v.is_finite()) {
+            continue;
+        }
+        let start = lefts.partition_point(|&l| l < row[0] - widest);
+        // An inverted box (a prediction whose corners crossed) ends before it starts.
+        let end = lefts.partition_point(|&l| l < row[2]).max(start);
+        for &c in &order[start..end] {
+            let v = iou(row, &cols[c]);
+            if v > 0.0 {
+                pairs.push((r, c, v));
+            }
+        }
+    }
+    pairs
+}
+
+/// Union-find over tracks and boxes.
+struct Groups {
+    parent: Vec<usize>,
+}
+
+impl Groups {
+    fn new(n: usize) -> Self {
+        Self {
+            parent: (0..n).collect(),
+        }
+    }
+
+    fn root(&mut self, mut i: usize) -> usize {
+        while self.parent[i] != i {
+            self.parent[i] = self.parent[self.parent[i]];
+            i = self.parent[i];
+        }
+        i
+    }
+
+    fn join(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.root(a), self.root(b));
+        if ra != rb {
+            self.parent[ra.max(rb)] = ra.min(rb);
+        }
+    }
+}

@@ -2,7 +2,7 @@
 //! box is associated, high-score boxes first to all tracks, then low-score boxes to the
 //! tracks the first stage left; tracks start only from unmatched high-score boxes.
 
-use crate::associate::{Matrix, assign};
+use crate::associate::assign_iou;
 use crate::config::{ByteTrackConfig, Checked};
 use crate::error::Result;
 use crate::kalman::{BoxFilter, Corners};
@@ -63,8 +63,7 @@ impl ByteTrack {
     ) -> Result<crate::associate::Matching> {
         let row_boxes: Vec<Corners> = rows.iter().map(|&r| self.predicted[r]).collect();
         let col_boxes: Vec<Corners> = cols.iter().map(|&c| detections[c].corners).collect();
-        let iou = Matrix::iou(&row_boxes, &col_boxes);
-        let matching = assign(&iou, &iou, threshold)?;
+        let matching = assign_iou(&row_boxes, &col_boxes, threshold)?;
         let noise = &self.checked.noise;
         for &(r, c) in &matching.matched {
             let track = &mut self.tracks[rows[r]];

@@ -45,7 +45,7 @@ mod tracker;
 #[cfg(test)]
 mod tests;
 
-pub use associate::{Matching, Matrix, assign, iou};
+pub use associate::{Matching, Matrix, assign, assign_iou, assign_overlapping, iou};
 pub use bytetrack::{ByteTrack, ByteTrackTracker};
 pub use config::{
     ByteTrackConfig, MAX_COAST_FRAMES, MAX_CONSECUTIVE_FRAMES, MAX_DELTA_T, MAX_FRAME_RATE,

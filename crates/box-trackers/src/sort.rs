@@ -2,7 +2,7 @@
 //! matched to detections by the maximum-IoU assignment, tracks started from unmatched
 //! detections and deleted after `max_misses` frames without a match.
 
-use crate::associate::{Matrix, assign};
+use crate::associate::assign_iou;
 use crate::config::{Checked, SortConfig};
 use crate::error::Result;
 use crate::kalman::{BoxFilter, Corners};
@@ -74,8 +74,7 @@ impl Association for Sort {
             t.misses += 1;
         }
         let boxes: Vec<Corners> = detections.iter().map(|d| d.corners).collect();
-        let iou = Matrix::iou(&self.boxes(), &boxes);
-        let matching = assign(&iou, &iou, self.config.minimum_iou_threshold)?;
+        let matching = assign_iou(&self.boxes(), &boxes, self.config.minimum_iou_threshold)?;
         let mut out = Vec::with_capacity(matching.matched.len());
         for &(row, col) in &matching.matched {
             let track = &mut self.tracks[row];

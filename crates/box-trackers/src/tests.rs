@@ -426,7 +426,10 @@ fn coasting_outputs_confirmed_tracks_at_their_prediction_through_a_gap() {
     };
     let mut t = config.build().expect("valid");
     t.step(1, &[det(1, 1, 100.0, 50.0, 0.9)]).expect("step");
-    assert_eq!(ids(&t.step(2, &[det(2, 2, 104.0, 50.0, 0.9)]).expect("step")), vec![1]);
+    assert_eq!(
+        ids(&t.step(2, &[det(2, 2, 104.0, 50.0, 0.9)]).expect("step")),
+        vec![1]
+    );
     // Frame 3 without it: output at the prediction, which is the filter's box after the miss.
     let states = t.step(3, &[]).expect("step");
     assert_eq!(ids(&states), vec![1]);
@@ -438,15 +441,78 @@ fn coasting_outputs_confirmed_tracks_at_their_prediction_through_a_gap() {
     assert!(b.left > 104.0, "it moves on: {}", b.left);
     // Frames 4 and 5 are a gap (replayed): frame 4 is the second miss, output; frame 5 the
     // third, not output; at frame 6 it is found again.
-    assert_eq!(ids(&t.step(6, &[det(6, 6, 120.0, 50.0, 0.9)]).expect("step")), vec![1]);
+    assert_eq!(
+        ids(&t.step(6, &[det(6, 6, 120.0, 50.0, 0.9)]).expect("step")),
+        vec![1]
+    );
     let tracks = t.finish().expect("finish");
-    let frames: Vec<u32> = tracks.tracks()[0].points().iter().map(|p| p.frame).collect();
+    let frames: Vec<u32> = tracks.tracks()[0]
+        .points()
+        .iter()
+        .map(|p| p.frame)
+        .collect();
     assert_eq!(frames, vec![2, 3, 4, 6]);
     // Without coasting (the reference's way) only the detections are output.
     let mut t = SortConfig::default().build().expect("defaults");
     for f in 1..=3 {
-        t.step(f, &[det(f.into(), f, 100.0 + 4.0 * f64::from(f), 50.0, 0.9)]).expect("step");
+        t.step(
+            f,
+            &[det(f.into(), f, 100.0 + 4.0 * f64::from(f), 50.0, 0.9)],
+        )
+        .expect("step");
     }
     assert!(t.step(4, &[]).expect("step").is_empty());
-    assert!(SortConfig { coast_frames: MAX_COAST_FRAMES + 1, ..SortConfig::default() }.build().is_err());
+    assert!(
+        SortConfig {
+            coast_frames: MAX_COAST_FRAMES + 1,
+            ..SortConfig::default()
+        }
+        .build()
+        .is_err()
+    );
+}
+
+#[test]
+fn the_overlap_groups_assign_as_the_dense_problem_on_random_scenes() {
+    // 300 scenes of up to 40 tracks and 40 boxes, crowded enough that groups hold several of
+    // each; a fixed linear congruential sequence, so the scenes are the same every run.
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1);
+        (state >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let boxes = |n: usize, next: &mut dyn FnMut() -> f64| -> Vec<Corners> {
+        (0..n)
+            .map(|_| {
+                let (x, y) = (300.0 * next(), 200.0 * next());
+                let (w, h) = (10.0 + 30.0 * next(), 20.0 + 40.0 * next());
+                [x, y, x + w, y + h]
+            })
+            .collect()
+    };
+    // An inverted row (corners crossed, as a diverged prediction can be) overlaps nothing.
+    let inverted = [[50.0, 0.0, 10.0, 40.0], [0.0, 0.0, 20.0, 40.0]];
+    // (The box at 15 starts within one width of the inverted row's left edge but after its
+    // right one: the sweep's window is empty and must not be reversed.)
+    let cols = [[15.0, 0.0, 35.0, 40.0], [0.0, 0.0, 20.0, 40.0]];
+    let dense = Matrix::iou(&inverted, &cols);
+    assert_eq!(
+        assign_overlapping(&inverted, &cols, 0.3).expect("groups"),
+        assign(&dense, &dense, 0.3).expect("dense")
+    );
+    let mut groups_seen = 0;
+    for scene in 0..300 {
+        let rows = boxes(scene % 40, &mut next);
+        let cols = boxes((scene * 7) % 41, &mut next);
+        for threshold in [0.1, 0.3] {
+            let dense = Matrix::iou(&rows, &cols);
+            let want = assign(&dense, &dense, threshold).expect("dense");
+            let got = assign_overlapping(&rows, &cols, threshold).expect("groups");
+            assert_eq!(got, want, "scene {scene}, threshold {threshold}");
+            groups_seen += usize::from(want.matched.len() > 1);
+        }
+    }
+    assert!(groups_seen > 100);
 }

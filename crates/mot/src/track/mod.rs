@@ -1025,42 +1025,102 @@ const KEY_COMMENTS: [(&str, &[(&str, &str)]); 12] = [
     (
         "sort",
         &[
-            ("lost_track_buffer", "frames at 30 fps a track lives without a match (scaled by frame_rate)"),
+            (
+                "lost_track_buffer",
+                "frames at 30 fps a track lives without a match (scaled by frame_rate)",
+            ),
             ("frame_rate", "the video's frame rate, frames per second"),
-            ("track_activation_threshold", "the least score that starts a track"),
-            ("minimum_consecutive_frames", "matches (the first detection included) before a track is output"),
+            (
+                "track_activation_threshold",
+                "the least score that starts a track",
+            ),
+            (
+                "minimum_consecutive_frames",
+                "matches (the first detection included) before a track is output",
+            ),
             ("minimum_iou_threshold", "the least IoU of a match"),
-            ("coast_frames", "frames a confirmed track is output at its prediction after a miss (0: only its detections, as the reference)"),
-            ("state", "the Kalman state: corners, or centre-area-aspect (the paper's)"),
+            (
+                "coast_frames",
+                "frames a confirmed track is output at its prediction after a miss (0: only its detections, as the reference)",
+            ),
+            (
+                "state",
+                "the Kalman state: corners, or centre-area-aspect (the paper's)",
+            ),
         ],
     ),
     (
         "bytetrack",
         &[
-            ("lost_track_buffer", "frames at 30 fps a track lives without a match (scaled by frame_rate)"),
+            (
+                "lost_track_buffer",
+                "frames at 30 fps a track lives without a match (scaled by frame_rate)",
+            ),
             ("frame_rate", "the video's frame rate, frames per second"),
-            ("track_activation_threshold", "the least score that starts a track (from a high-score box)"),
-            ("minimum_consecutive_frames", "consecutive matches (the first detection included) before a track is confirmed"),
-            ("minimum_iou_threshold", "the least IoU of a match in the first stage (and the second unless second_iou_threshold is set)"),
-            ("high_conf_det_threshold", "boxes scoring at least this are matched first; the others only to the tracks left"),
-            ("low_conf_det_threshold", "boxes scoring below this are dropped (the paper: 0.1)"),
-            ("second_iou_threshold", "the least IoU of a second-stage match (unset: minimum_iou_threshold; the paper: 0.5)"),
-            ("coast_frames", "frames a confirmed track is output at its prediction after a miss (0: only its detections, as the reference)"),
+            (
+                "track_activation_threshold",
+                "the least score that starts a track (from a high-score box)",
+            ),
+            (
+                "minimum_consecutive_frames",
+                "consecutive matches (the first detection included) before a track is confirmed",
+            ),
+            (
+                "minimum_iou_threshold",
+                "the least IoU of a match in the first stage (and the second unless second_iou_threshold is set)",
+            ),
+            (
+                "high_conf_det_threshold",
+                "boxes scoring at least this are matched first; the others only to the tracks left",
+            ),
+            (
+                "low_conf_det_threshold",
+                "boxes scoring below this are dropped (the paper: 0.1)",
+            ),
+            (
+                "second_iou_threshold",
+                "the least IoU of a second-stage match (unset: minimum_iou_threshold; the paper: 0.5)",
+            ),
+            (
+                "coast_frames",
+                "frames a confirmed track is output at its prediction after a miss (0: only its detections, as the reference)",
+            ),
             ("state", "the Kalman state: corners, or centre-area-aspect"),
         ],
     ),
     (
         "ocsort",
         &[
-            ("lost_track_buffer", "frames at 30 fps a track lives without a match (scaled by frame_rate)"),
+            (
+                "lost_track_buffer",
+                "frames at 30 fps a track lives without a match (scaled by frame_rate)",
+            ),
             ("frame_rate", "the video's frame rate, frames per second"),
-            ("minimum_consecutive_frames", "consecutive matches before a track is output (any match in the first frames)"),
+            (
+                "minimum_consecutive_frames",
+                "consecutive matches before a track is output (any match in the first frames)",
+            ),
             ("minimum_iou_threshold", "the least IoU of a match"),
-            ("direction_consistency_weight", "the weight of the direction term in the cost (OCM)"),
-            ("high_conf_det_threshold", "boxes scoring below this are not used"),
-            ("delta_t", "frames back to the observation a direction is measured from"),
-            ("coast_frames", "frames a confirmed track is output at its prediction after a miss (0: only its detections, as the reference)"),
-            ("state", "the Kalman state: centre-area-aspect (the paper's), or corners"),
+            (
+                "direction_consistency_weight",
+                "the weight of the direction term in the cost (OCM)",
+            ),
+            (
+                "high_conf_det_threshold",
+                "boxes scoring below this are not used",
+            ),
+            (
+                "delta_t",
+                "frames back to the observation a direction is measured from",
+            ),
+            (
+                "coast_frames",
+                "frames a confirmed track is output at its prediction after a miss (0: only its detections, as the reference)",
+            ),
+            (
+                "state",
+                "the Kalman state: centre-area-aspect (the paper's), or corners",
+            ),
         ],
     ),
 ];

@@ -1,7 +1,7 @@
 //! SORT, ByteTrack and OC-SORT (the `box-trackers` crate) on a detection file: every row a
 //! box detection with the file's confidence as its score, stepped frame by frame.
 
-use box_trackers::{BoxTracker, Association};
+use box_trackers::{Association, BoxTracker};
 use tracker_model::{BatchTracker, Detection, MotRow, Online, TrackSet, scans_of};
 
 use super::{EffectiveConfig, TrackerKind};

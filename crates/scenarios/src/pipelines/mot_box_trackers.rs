@@ -51,7 +51,11 @@ const OURS: [TrackerKind; 3] = [
     TrackerKind::GnnOnline,
     TrackerKind::Phd,
 ];
-const BOX: [TrackerKind; 3] = [TrackerKind::Sort, TrackerKind::ByteTrack, TrackerKind::OcSort];
+const BOX: [TrackerKind; 3] = [
+    TrackerKind::Sort,
+    TrackerKind::ByteTrack,
+    TrackerKind::OcSort,
+];
 const MEASURES: [Measure; 3] = [Measure::Mota, Measure::Idf1, Measure::Hota];
 
 /// "ours's measure ≥ the box tracker's", margin 0, fixed before the sequences ran.
@@ -157,7 +161,12 @@ fn config(p: &Params, env: &Env<'_>) -> Result<TrackConfig> {
 }
 
 fn tuned_header(p: &Params) -> String {
-    let seeds: Vec<String> = p.tuning.sequences.iter().map(|s| s.seed.to_string()).collect();
+    let seeds: Vec<String> = p
+        .tuning
+        .sequences
+        .iter()
+        .map(|s| s.seed.to_string())
+        .collect();
     format!(
         "Written by `cargo xtask tune mot-box-trackers`: do not edit. The coordinate search\n\
          of [params.tuning] in fixtures/scenarios/mot-box-trackers.toml for SORT, ByteTrack\n\
@@ -188,8 +197,16 @@ impl Pipeline for MotBoxTrackers {
 
     fn tune(p: &Params, env: &Env<'_>) -> Result<Option<Tuned>> {
         check_seeds(p)?;
-        if let Some(s) = p.tuning.settings.iter().find(|s| s.trackers.iter().any(|t| !t.is_sort_family())) {
-            bail!("the search tunes the box trackers only; {} names another", s.key);
+        if let Some(s) = p
+            .tuning
+            .settings
+            .iter()
+            .find(|s| s.trackers.iter().any(|t| !t.is_sort_family()))
+        {
+            bail!(
+                "the search tunes the box trackers only; {} names another",
+                s.key
+            );
         }
         Ok(Some(search(&p.tuning, &tuned_header(p), env)?))
     }
@@ -294,14 +311,35 @@ fn means_table(out: &Output) -> Table {
         "Means over the sequences (± 95 % CI over sequences); time per frame is the whole \
          `cargo xtask track` run (the model fit included for ours) in the dev profile with the \
          sequences in parallel: indicative only (docs/benchmarks.md has the criterion medians)",
-        &["tracker", "settings", "MOTA", "IDF1", "HOTA", "IDSW", "ms per frame"],
+        &[
+            "tracker",
+            "settings",
+            "MOTA",
+            "IDF1",
+            "HOTA",
+            "IDSW",
+            "ms per frame",
+        ],
     );
     let rows = out
         .params
         .trackers
         .iter()
-        .map(|&t| (t, &out.tuned, if t.is_sort_family() { "tuned" } else { "ours, tuned" }))
-        .chain(BOX.into_iter().map(|t| (t, &out.defaults, "reference defaults")));
+        .map(|&t| {
+            (
+                t,
+                &out.tuned,
+                if t.is_sort_family() {
+                    "tuned"
+                } else {
+                    "ours, tuned"
+                },
+            )
+        })
+        .chain(
+            BOX.into_iter()
+                .map(|t| (t, &out.defaults, "reference defaults")),
+        );
     for (t, set, settings) in rows {
         let mut row = vec![t.to_string(), settings.into()];
         row.extend(MEASURES.map(|m| pm(set.mean(t, m))));
