@@ -145,10 +145,10 @@ impl BoxFilter {
     /// The update with a measurement-space vector `z`: per axis S = P₀₀ + R, K = P Hᵀ S⁻¹,
     /// x ← x + K (z − H x), and the Joseph form P ← (I − K H) P (I − K H)ᵀ + K R Kᵀ.
     pub fn update(&mut self, noise: &Noise, z: &[f64; 4]) -> Result<()> {
-        for a in 0..4 {
+        for (a, &za) in z.iter().enumerate() {
             let [pp, pv, vp, vv] = self.p[a];
             let s = pp + noise.r[a];
-            if !(s > 0.0) {
+            if s.is_nan() || s <= 0.0 {
                 return Err(tracker_model::Error::NotPositiveDefinite {
                     what: "box filter innovation covariance",
                 }
@@ -156,7 +156,7 @@ impl BoxFilter {
             }
             let s_inv = 1.0 / s;
             let (kp, kv) = (pp * s_inv, vp * s_inv);
-            let innovation = z[a] - self.x[a];
+            let innovation = za - self.x[a];
             self.x[a] += kp * innovation;
             self.x[a + 4] += kv * innovation;
             // A = (I − K H) P with I − K H = [[1 − kp, 0], [−kv, 1]], then A (I − K H)ᵀ.

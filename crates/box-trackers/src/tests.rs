@@ -1,5 +1,9 @@
 //! Hand-worked cases: the filter against the textbook matrix formulas, the IoU, ByteTrack's
 //! second stage, OC-SORT's direction term and its re-update after a gap, gaps and errors.
+#![expect(
+    clippy::float_cmp,
+    reason = "IoUs rounded to f32 and boxes copied from the filter are compared exactly"
+)]
 
 use nalgebra::{DMatrix, DVector};
 use tracker_model::{BoundingBox, Detection, Tracker, Vec2};
@@ -393,7 +397,7 @@ fn bad_input_is_a_typed_error() {
         low_conf_det_threshold: 0.8,
         ..ByteTrackConfig::default()
     };
-    let message = bad_bt.build().err().expect("refused").to_string();
+    let message = bad_bt.build().expect_err("refused").to_string();
     assert!(message.contains("low_conf_det_threshold"), "{message}");
 }
 
