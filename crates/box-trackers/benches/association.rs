@@ -22,7 +22,11 @@ fn scene(n: usize) -> Vec<Vec<Detection>> {
                     let left = 40.0 * col + speed * f64::from(f) + jitter;
                     let b = BoundingBox::new(left, 80.0 * row + jitter, 20.0, 50.0)
                         .expect("a valid box");
-                    let score = if (i + f as usize).is_multiple_of(10) { 0.4 } else { 0.9 };
+                    let score = if (i + f as usize).is_multiple_of(10) {
+                        0.4
+                    } else {
+                        0.9
+                    };
                     Detection::boxed((i + n * f as usize) as u64, f, b).with_score(score)
                 })
                 .collect()
