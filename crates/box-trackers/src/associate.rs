@@ -75,34 +75,43 @@ pub struct Matching {
 /// same shape; SORT and ByteTrack gate on the score itself, OC-SORT on the IoU inside its
 /// score.
 pub fn assign(score: &Matrix, gate: &Matrix, threshold: f64) -> Result<Matching> {
-    let mut row_free = vec![true; score.n_rows];
-    let mut col_free = vec![true; score.n_cols];
     let mut matched = Vec::new();
     if score.n_rows > 0 && score.n_cols > 0 {
         let weights: Vec<f64> = score.values.iter().map(|&v| f64::from(v)).collect();
         let mut pairs = assignment::maximise(score.n_rows, score.n_cols, &weights)?;
         pairs.sort_unstable();
         let threshold = threshold as f32;
-        for (r, c) in pairs {
-            if gate.at(r, c) >= threshold {
-                matched.push((r, c));
-                row_free[r] = false;
-                col_free[c] = false;
-            }
+        matched.extend(
+            pairs
+                .into_iter()
+                .filter(|&(r, c)| gate.at(r, c) >= threshold),
+        );
+    }
+    Ok(Matching::of(matched, score.n_rows, score.n_cols))
+}
+
+impl Matching {
+    /// `matched` (in row order) with the rows and columns it leaves.
+    fn of(matched: Vec<(usize, usize)>, n_rows: usize, n_cols: usize) -> Self {
+        let mut row_free = vec![true; n_rows];
+        let mut col_free = vec![true; n_cols];
+        for &(r, c) in &matched {
+            row_free[r] = false;
+            col_free[c] = false;
+        }
+        let free = |flags: Vec<bool>| {
+            flags
+                .into_iter()
+                .enumerate()
+                .filter_map(|(i, f)| f.then_some(i))
+                .collect()
+        };
+        Self {
+            matched,
+            unmatched_rows: free(row_free),
+            unmatched_cols: free(col_free),
         }
     }
-    let free = |flags: Vec<bool>| {
-        flags
-            .into_iter()
-            .enumerate()
-            .filter_map(|(i, f)| f.then_some(i))
-            .collect()
-    };
-    Ok(Matching {
-        matched,
-        unmatched_rows: free(row_free),
-        unmatched_cols: free(col_free),
-    })
 }
 
 /// The maximum-IoU assignment of `rows` to `cols` gated at `threshold` (SORT's and
@@ -166,24 +175,7 @@ pub fn assign_overlapping(rows: &[Corners], cols: &[Corners], threshold: f64) ->
         );
     }
     matched.sort_unstable();
-    let mut row_free = vec![true; rows.len()];
-    let mut col_free = vec![true; cols.len()];
-    for &(r, c) in &matched {
-        row_free[r] = false;
-        col_free[c] = false;
-    }
-    let free = |flags: Vec<bool>| -> Vec<usize> {
-        flags
-            .into_iter()
-            .enumerate()
-            .filter_map(|(i, f)| f.then_some(i))
-            .collect()
-    };
-    Ok(Matching {
-        matched,
-        unmatched_rows: free(row_free),
-        unmatched_cols: free(col_free),
-    })
+    Ok(Matching::of(matched, rows.len(), cols.len()))
 }
 
 /// Every (row, col, IoU) with IoU > 0, found by sweeping the columns sorted by left edge:

@@ -13,7 +13,7 @@ use crate::associate::{Matching, Matrix, assign};
 use crate::config::{Checked, OcSortConfig};
 use crate::error::Result;
 use crate::kalman::{BoxFilter, Corners, Noise, StateLayout};
-use crate::tracker::{Association, BoxDetection, BoxTracker, IdSource};
+use crate::tracker::{Association, BoxDetection, BoxTracker, IdSource, coasting_of};
 
 /// OC-SORT behind tracker-model's interface.
 pub type OcSortTracker = BoxTracker<OcSort>;
@@ -315,11 +315,7 @@ impl Association for OcSort {
         Ok(out)
     }
     fn coasting(&self, max: u32) -> Vec<(u64, Corners)> {
-        let layout = self.checked.noise.layout;
-        self.tracks
-            .iter()
-            .filter(|t| (1..=max).contains(&t.misses))
-            .filter_map(|t| Some((t.number?, t.filter.corners(layout))))
-            .collect()
+        let tracks = self.tracks.iter().map(|t| (t.number, t.misses, &t.filter));
+        coasting_of(tracks, self.checked.noise.layout, max)
     }
 }

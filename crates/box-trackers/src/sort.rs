@@ -6,7 +6,7 @@ use crate::associate::assign_iou;
 use crate::config::{Checked, SortConfig};
 use crate::error::Result;
 use crate::kalman::{BoxFilter, Corners};
-use crate::tracker::{Association, BoxDetection, BoxTracker, IdSource};
+use crate::tracker::{Association, BoxDetection, BoxTracker, IdSource, coasting_of};
 
 /// SORT behind tracker-model's interface.
 pub type SortTracker = BoxTracker<Sort>;
@@ -108,11 +108,7 @@ impl Association for Sort {
         Ok(out)
     }
     fn coasting(&self, max: u32) -> Vec<(u64, Corners)> {
-        let layout = self.checked.noise.layout;
-        self.tracks
-            .iter()
-            .filter(|t| (1..=max).contains(&t.misses))
-            .filter_map(|t| Some((t.number?, t.filter.corners(layout))))
-            .collect()
+        let tracks = self.tracks.iter().map(|t| (t.number, t.misses, &t.filter));
+        coasting_of(tracks, self.checked.noise.layout, max)
     }
 }

@@ -12,7 +12,7 @@ use tracker_model::{
 };
 
 use crate::error::{Error, Result};
-use crate::kalman::Corners;
+use crate::kalman::{BoxFilter, Corners, StateLayout};
 
 /// A box detection as the associations read it.
 #[derive(Debug, Clone, PartialEq)]
@@ -87,6 +87,19 @@ pub trait Association {
     /// The confirmed tracks missed for 1 to `max` frames now, as (track number, predicted
     /// box).
     fn coasting(&self, max: u32) -> Vec<(u64, Corners)>;
+}
+
+/// [`Association::coasting`] over any association's tracks, given as (number, misses,
+/// filter).
+pub(crate) fn coasting_of<'a>(
+    tracks: impl Iterator<Item = (Option<u64>, u32, &'a BoxFilter)>,
+    layout: StateLayout,
+    max: u32,
+) -> Vec<(u64, Corners)> {
+    tracks
+        .filter(|(_, misses, _)| (1..=max).contains(misses))
+        .filter_map(|(number, _, filter)| Some((number?, filter.corners(layout))))
+        .collect()
 }
 
 /// A detection given to a confirmed track at a step.

@@ -10,7 +10,7 @@
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
 
-use box_trackers::{Assigned, ByteTrackConfig, OcSortConfig, SortConfig};
+use box_trackers::{Assigned, Association, BoxTracker, ByteTrackConfig, OcSortConfig, SortConfig};
 use tracker_model::{Detection, Frame, parse_mot};
 
 const FILES: [&str; 4] = [
@@ -101,29 +101,30 @@ fn check(name: &str, tracker: &str, got: &BTreeMap<(Frame, u64), u64>) {
     assert!(!want.is_empty());
 }
 
+/// Every file through a tracker built by `make`, against the reference's output for `name`.
+fn check_all<A: Association>(name: &str, make: impl Fn() -> BoxTracker<A>) {
+    for file in FILES {
+        let mut t = make();
+        let got = ours(&scans(file), |f, d| t.update(f, d).expect("step"));
+        check(file, name, &got);
+    }
+}
+
 #[test]
 fn sort_equals_the_reference() {
-    for name in FILES {
-        let mut t = SortConfig::default().build().expect("defaults");
-        let got = ours(&scans(name), |f, d| t.update(f, d).expect("step"));
-        check(name, "sort", &got);
-    }
+    check_all("sort", || SortConfig::default().build().expect("defaults"));
 }
 
 #[test]
 fn bytetrack_equals_the_reference() {
-    for name in FILES {
-        let mut t = ByteTrackConfig::default().build().expect("defaults");
-        let got = ours(&scans(name), |f, d| t.update(f, d).expect("step"));
-        check(name, "bytetrack", &got);
-    }
+    check_all("bytetrack", || {
+        ByteTrackConfig::default().build().expect("defaults")
+    });
 }
 
 #[test]
 fn ocsort_equals_the_reference() {
-    for name in FILES {
-        let mut t = OcSortConfig::default().build().expect("defaults");
-        let got = ours(&scans(name), |f, d| t.update(f, d).expect("step"));
-        check(name, "ocsort", &got);
-    }
+    check_all("ocsort", || {
+        OcSortConfig::default().build().expect("defaults")
+    });
 }

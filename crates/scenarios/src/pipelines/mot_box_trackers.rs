@@ -17,7 +17,9 @@ use anyhow::{Context, Result, bail};
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 
-use super::mot_realistic::{Measure, SequenceSpec, SetScores, Tuning, pm, score_set, search};
+use super::mot_realistic::{
+    Measure, SequenceSpec, SetScores, Tuning, pm, score_set, search, verdict_claim,
+};
 use crate::seeds::check_disjoint;
 use crate::stats::{Paired, Verdict, mean_ci};
 use crate::tune::Tuned;
@@ -264,21 +266,9 @@ impl Pipeline for MotBoxTrackers {
     fn claims(out: &Output) -> Vec<Claim> {
         Comparison::all()
             .map(|c| {
-                let paired = c.paired(&out.tuned);
-                let verdict = Verdict::of(&paired, 0.0);
                 let expected = out.params.fresh_verdicts[&c.key()];
-                Claim::new(
-                    format!(
-                        "{} on the {} fresh sequences: difference {} (95 % paired t) — {} \
-                         (recorded: {})",
-                        c.statement(),
-                        out.params.sequences.len(),
-                        paired.show(),
-                        verdict.name(),
-                        expected.name()
-                    ),
-                    verdict == expected,
-                )
+                let n = out.params.sequences.len();
+                verdict_claim(&c.statement(), n, &c.paired(&out.tuned), 0.0, expected)
             })
             .collect()
     }

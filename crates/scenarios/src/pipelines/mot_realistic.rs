@@ -665,19 +665,13 @@ impl Pipeline for MotRealistic {
             .iter()
             .map(|o| {
                 let paired = fresh.paired(&out.params.peer, o);
-                let verdict = Verdict::of(&paired, o.margin);
                 let expected = out.params.fresh_verdicts[o.key];
-                Claim::new(
-                    format!(
-                        "{} on the {} fresh sequences: difference {} (95 % paired t) — {} \
-                         (recorded: {})",
-                        o.statement(),
-                        fresh.specs.len(),
-                        paired.show(),
-                        verdict.name(),
-                        expected.name()
-                    ),
-                    verdict == expected,
+                verdict_claim(
+                    &o.statement(),
+                    fresh.specs.len(),
+                    &paired,
+                    o.margin,
+                    expected,
                 )
             })
             .collect()
@@ -711,6 +705,28 @@ impl Pipeline for MotRealistic {
             },
         ]
     }
+}
+
+/// The claim that `statement`'s verdict on `n` fresh sequences (its paired interval against
+/// `margin`) is still the `expected` one, recorded from their first run.
+pub(crate) fn verdict_claim(
+    statement: &str,
+    n: usize,
+    paired: &Paired,
+    margin: f64,
+    expected: Verdict,
+) -> Claim {
+    let verdict = Verdict::of(paired, margin);
+    Claim::new(
+        format!(
+            "{statement} on the {n} fresh sequences: difference {} (95 % paired t) — {} \
+             (recorded: {})",
+            paired.show(),
+            verdict.name(),
+            expected.name()
+        ),
+        verdict == expected,
+    )
 }
 
 /// "mean ± half-width" of a (mean, 95 % half-width) pair.
