@@ -2,8 +2,9 @@
 //! `mot-realistic` pipelines run. MCMCDA (offline batch, or online with a sliding window) and
 //! GNN associate the box centres as point measurements; the SMC-PHD filter tracks the boxes
 //! themselves; SORT, ByteTrack and OC-SORT (the `box-trackers` crate, with the defaults of
-//! roboflow `trackers`) track the boxes frame by frame. Without a configuration each tracker uses its model scaled to the boxes
-//! ([`McmcdaConfig::for_boxes`], [`PhdConfig::for_boxes`]) and then fitted to the file
+//! roboflow `trackers`) track the boxes frame by frame. Without a configuration each tracker
+//! uses its model scaled to the boxes ([`McmcdaConfig::for_boxes`], [`PhdConfig::for_boxes`])
+//! and then fitted to the file
 //! ([`fit_model`]: p_d, clutter and birth rates, R and q from the confident tracks of a first
 //! GNN pass, iterated).
 //!
