@@ -23,7 +23,10 @@ use super::mot_realistic::{
 use crate::seeds::check_disjoint;
 use crate::stats::{Paired, Verdict, mean_ci};
 use crate::tune::Tuned;
-use crate::{Claim, Env, Headline, Metrics, Pipeline, Section, Table, fmt_num};
+use crate::{
+    BAR_WIDTH, Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style,
+    Table, fmt_num,
+};
 use mot::track::{TrackConfig, TrackerKind};
 
 /// The `mot-box-trackers` pipeline.
@@ -259,7 +262,7 @@ impl Pipeline for MotBoxTrackers {
                 count(Verdict::Loses)
             ),
             tables: vec![means_table(out), comparisons_table(out)],
-            figures: vec![],
+            figures: vec![means_figure(out)],
         }
     }
 
@@ -296,6 +299,65 @@ impl Pipeline for MotBoxTrackers {
     }
 }
 
+/// Every row of the means table: (tracker, its scores, its settings).
+fn rows(out: &Output) -> Vec<(TrackerKind, &SetScores, &'static str)> {
+    let ours = |t: TrackerKind| {
+        if t.is_sort_family() {
+            "tuned"
+        } else {
+            "ours, tuned"
+        }
+    };
+    out.params
+        .trackers
+        .iter()
+        .map(|&t| (t, &out.tuned, ours(t)))
+        .chain(
+            BOX.into_iter()
+                .map(|t| (t, &out.defaults, "reference defaults")),
+        )
+        .collect()
+}
+
+/// MOTA, IDF1 and HOTA of every row as grouped bars, each with its 95 % interval.
+fn means_figure(out: &Output) -> Figure {
+    let rows = rows(out);
+    let mut series = Vec::new();
+    for (k, m) in MEASURES.into_iter().enumerate() {
+        let offset = BAR_WIDTH * (k as f64 - 1.0);
+        let at = |i: usize| (i + 1) as f64 + offset;
+        let means: Vec<(f64, (f64, f64))> = rows
+            .iter()
+            .enumerate()
+            .map(|(i, (t, set, _))| (at(i), set.mean(*t, m)))
+            .collect();
+        let bars = means.iter().map(|&(x, (mean, _))| (x, mean)).collect();
+        series.push(Series::new(m.name(), bars, Style::Bars, k));
+        for &(x, (mean, half)) in &means {
+            let interval = vec![(x, mean - half), (x, mean + half)];
+            series.push(Series::new("", interval, Style::Line, 7).in_front());
+        }
+    }
+    let order: Vec<String> = rows
+        .iter()
+        .enumerate()
+        .map(|(i, (t, _, settings))| format!("{} {t} ({settings})", i + 1))
+        .collect();
+    Figure::new(
+        "means",
+        &format!(
+            "Means over the sequences with their 95 % intervals (dark lines). Trackers: {}.",
+            order.join(", ")
+        ),
+        Chart::new(
+            "MOTA, IDF1 and HOTA per tracker",
+            "tracker (numbered as in the caption)",
+            "score",
+            series,
+        ),
+    )
+}
+
 fn means_table(out: &Output) -> Table {
     let mut table = Table::new(
         "Means over the sequences (± 95 % CI over sequences); time per frame is the whole \
@@ -311,26 +373,7 @@ fn means_table(out: &Output) -> Table {
             "ms per frame",
         ],
     );
-    let rows = out
-        .params
-        .trackers
-        .iter()
-        .map(|&t| {
-            (
-                t,
-                &out.tuned,
-                if t.is_sort_family() {
-                    "tuned"
-                } else {
-                    "ours, tuned"
-                },
-            )
-        })
-        .chain(
-            BOX.into_iter()
-                .map(|t| (t, &out.defaults, "reference defaults")),
-        );
-    for (t, set, settings) in rows {
+    for (t, set, settings) in rows(out) {
         let mut row = vec![t.to_string(), settings.into()];
         row.extend(MEASURES.map(|m| pm(set.mean(t, m))));
         row.push(fmt_num(mean_ci(set.of(t).map(|s| s.idsw)).0));
