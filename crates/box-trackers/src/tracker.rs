@@ -243,7 +243,8 @@ impl<A: Association> Tracker for BoxTracker<A> {
             .collect())
     }
 
-    /// Every confirmed track's boxes, at the frames a detection was given to it.
+    /// Every confirmed track's boxes: at the frames a detection was given to it, and with
+    /// coasting at the frames it was output at its prediction.
     fn finish(&mut self) -> Result<TrackSet> {
         Ok(TrackSet::from_tracks(std::mem::take(&mut self.tracks))?)
     }
