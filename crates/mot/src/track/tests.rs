@@ -113,12 +113,18 @@ fn the_example_configs_load_and_differ_from_nothing_they_do_not_mention() {
         ),
         ("gnn", include_str!("../../../../fixtures/configs/gnn.toml")),
         ("phd", include_str!("../../../../fixtures/configs/phd.toml")),
-        ("sort", include_str!("../../../../fixtures/configs/sort.toml")),
+        (
+            "sort",
+            include_str!("../../../../fixtures/configs/sort.toml"),
+        ),
         (
             "bytetrack",
             include_str!("../../../../fixtures/configs/bytetrack.toml"),
         ),
-        ("ocsort", include_str!("../../../../fixtures/configs/ocsort.toml")),
+        (
+            "ocsort",
+            include_str!("../../../../fixtures/configs/ocsort.toml"),
+        ),
     ] {
         let tracker: TrackerKind = name.parse().unwrap();
         let effective = config(text)
