@@ -139,33 +139,39 @@ pub fn assign_overlapping(rows: &[Corners], cols: &[Corners], threshold: f64) ->
     for &(r, c, _) in &pairs {
         groups.join(r, rows.len() + c);
     }
-    let mut members: std::collections::BTreeMap<usize, (Vec<usize>, Vec<usize>)> =
+    let mut members: std::collections::BTreeMap<usize, Vec<(usize, usize, f32)>> =
         std::collections::BTreeMap::new();
-    for &(r, c, _) in &pairs {
-        let g = members.entry(groups.root(r)).or_default();
-        g.0.push(r);
-        g.1.push(c);
+    for &pair in &pairs {
+        members.entry(groups.root(pair.0)).or_default().push(pair);
     }
     let gate = threshold as f32;
     let mut matched = Vec::new();
-    for (_, (mut group_rows, mut group_cols)) in members {
-        group_rows.sort_unstable();
-        group_rows.dedup();
-        group_cols.sort_unstable();
-        group_cols.dedup();
-        let sub = Matrix {
-            n_rows: group_rows.len(),
-            n_cols: group_cols.len(),
-            values: group_rows
-                .iter()
-                .flat_map(|&r| group_cols.iter().map(move |&c| iou(&rows[r], &cols[c])))
-                .collect(),
-        };
-        if sub.values.len() == 1 {
-            if sub.values[0] >= gate {
-                matched.push((group_rows[0], group_cols[0]));
+    for group in members.into_values() {
+        if let [(r, c, v)] = group.as_slice() {
+            // One pair: the solver has nothing to choose.
+            if *v >= gate {
+                matched.push((*r, *c));
             }
             continue;
+        }
+        let sorted = |mut v: Vec<usize>| {
+            v.sort_unstable();
+            v.dedup();
+            v
+        };
+        let group_rows = sorted(group.iter().map(|p| p.0).collect());
+        let group_cols = sorted(group.iter().map(|p| p.1).collect());
+        // The pairs' IoUs, already computed; every other entry of the group is zero (no
+        // overlap).
+        let mut sub = Matrix {
+            n_rows: group_rows.len(),
+            n_cols: group_cols.len(),
+            values: vec![0.0; group_rows.len() * group_cols.len()],
+        };
+        for &(r, c, v) in &group {
+            if let (Ok(i), Ok(j)) = (group_rows.binary_search(&r), group_cols.binary_search(&c)) {
+                sub.values[i * sub.n_cols + j] = v;
+            }
         }
         let m = assign(&sub, &sub, threshold)?;
         matched.extend(

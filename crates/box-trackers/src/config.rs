@@ -24,26 +24,34 @@ fn invalid(name: &'static str, reason: String) -> ModelError {
 /// frames at 30 fps scaled to `frame_rate`, at least one for a positive buffer (the
 /// reference's rule).
 fn max_misses(lost_track_buffer: u32, frame_rate: f64) -> Result<u32> {
-    if lost_track_buffer > MAX_LOST_TRACK_BUFFER {
-        return Err(invalid(
-            "lost_track_buffer",
-            format!("{lost_track_buffer} is above the limit of {MAX_LOST_TRACK_BUFFER} frames"),
-        )
-        .into());
-    }
+    let buffer = f64::from(lost_track_buffer);
+    ensure_at_most(
+        buffer,
+        f64::from(MAX_LOST_TRACK_BUFFER),
+        "lost_track_buffer",
+        " frames",
+    )?;
     ensure_positive(frame_rate, "frame_rate")?;
-    if frame_rate > MAX_FRAME_RATE {
-        return Err(invalid(
-            "frame_rate",
-            format!("{frame_rate} is above the limit of {MAX_FRAME_RATE} frames per second"),
-        )
-        .into());
-    }
+    ensure_at_most(
+        frame_rate,
+        MAX_FRAME_RATE,
+        "frame_rate",
+        " frames per second",
+    )?;
     if lost_track_buffer == 0 {
         return Ok(0);
     }
-    let scaled = (frame_rate / 30.0 * f64::from(lost_track_buffer)).ceil();
+    let scaled = (frame_rate / 30.0 * buffer).ceil();
     Ok((scaled as u32).max(1))
+}
+
+/// `value` at most `max` (every count and rate a user sets has a limit), `unit` after the
+/// limit in the message.
+fn ensure_at_most(value: f64, max: f64, name: &'static str, unit: &str) -> Result<()> {
+    if value > max {
+        return Err(invalid(name, format!("{value} is above the limit of {max}{unit}")).into());
+    }
+    Ok(())
 }
 
 fn ensure_threshold(value: f64, name: &'static str) -> Result<f64> {
@@ -53,26 +61,19 @@ fn ensure_threshold(value: f64, name: &'static str) -> Result<f64> {
 /// The largest `coast_frames`.
 pub const MAX_COAST_FRAMES: u32 = 1_000;
 
-fn ensure_coast(value: u32) -> Result<u32> {
-    if value > MAX_COAST_FRAMES {
-        return Err(invalid(
-            "coast_frames",
-            format!("{value} is above the limit of {MAX_COAST_FRAMES}: each is a box per track"),
-        )
-        .into());
-    }
-    Ok(value)
+fn ensure_coast(value: u32) -> Result<()> {
+    let max = f64::from(MAX_COAST_FRAMES);
+    ensure_at_most(
+        f64::from(value),
+        max,
+        "coast_frames",
+        ": each is a box per track",
+    )
 }
 
-fn ensure_consecutive(value: u32) -> Result<u32> {
-    if value > MAX_CONSECUTIVE_FRAMES {
-        return Err(invalid(
-            "minimum_consecutive_frames",
-            format!("{value} is above the limit of {MAX_CONSECUTIVE_FRAMES}"),
-        )
-        .into());
-    }
-    Ok(value)
+fn ensure_consecutive(value: u32) -> Result<()> {
+    let max = f64::from(MAX_CONSECUTIVE_FRAMES);
+    ensure_at_most(f64::from(value), max, "minimum_consecutive_frames", "")
 }
 
 /// What every tracker's settings give once checked.

@@ -114,34 +114,32 @@ impl OcSortTrack {
     /// itself; the caller's real update follows, as in the reference).
     fn re_update(&mut self, noise: &Noise, b: &Corners) -> Result<()> {
         let gap = self.misses;
-        let virtual_at: Box<dyn Fn(f64) -> [f64; 4]> = match noise.layout {
-            StateLayout::Corners => {
-                let (last, new) = (self.last_observation, *b);
-                let step = |i: usize| (new[i] - last[i]) / f64::from(gap);
-                let delta = [step(0), step(1), step(2), step(3)];
-                Box::new(move |k| std::array::from_fn(|i| last[i] + k * delta[i]))
-            }
-            StateLayout::CentreAreaAspect => {
-                let centre_size = |z: [f64; 4]| {
-                    let w = (z[2] * z[3]).sqrt();
-                    let h = if z[3] != 0.0 {
-                        (z[2] / z[3]).sqrt()
-                    } else {
-                        0.0
-                    };
-                    [z[0], z[1], w, h]
-                };
-                let from = centre_size(noise.layout.measure(&self.last_observation));
-                let to = centre_size(noise.layout.measure(b));
-                let step: [f64; 4] = std::array::from_fn(|i| (to[i] - from[i]) / f64::from(gap));
-                Box::new(move |k| {
-                    let [x, y, w, h] = std::array::from_fn(|i| from[i] + k * step[i]);
-                    [x, y, w * h, w / h]
-                })
-            }
+        // The line runs through the corners, or through centre, width and height (the
+        // reference's w = √(s r), h = √(s / r) of the measurements).
+        let centre_size = |z: [f64; 4]| {
+            let w = (z[2] * z[3]).sqrt();
+            let h = if z[3] != 0.0 {
+                (z[2] / z[3]).sqrt()
+            } else {
+                0.0
+            };
+            [z[0], z[1], w, h]
         };
+        let (from, to) = match noise.layout {
+            StateLayout::Corners => (self.last_observation, *b),
+            StateLayout::CentreAreaAspect => (
+                centre_size(noise.layout.measure(&self.last_observation)),
+                centre_size(noise.layout.measure(b)),
+            ),
+        };
+        let step: [f64; 4] = std::array::from_fn(|i| (to[i] - from[i]) / f64::from(gap));
         for i in 0..gap {
-            let z = virtual_at(f64::from(i + 1));
+            let k = f64::from(i + 1);
+            let v: [f64; 4] = std::array::from_fn(|j| from[j] + k * step[j]);
+            let z = match noise.layout {
+                StateLayout::Corners => v,
+                StateLayout::CentreAreaAspect => [v[0], v[1], v[2] * v[3], v[2] / v[3]],
+            };
             self.filter.update(noise, &z)?;
             if i + 1 < gap {
                 self.filter.predict(noise);

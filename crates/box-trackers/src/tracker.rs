@@ -29,12 +29,7 @@ impl BoxDetection {
     /// Reads a detection: it must be a box, finite, with a finite score if it has one.
     pub fn of(d: &Detection) -> Result<Self> {
         let bbox = d.require_box("SORT, ByteTrack and OC-SORT track boxes")?;
-        let corners = [
-            bbox.left,
-            bbox.top,
-            bbox.left + bbox.width,
-            bbox.top + bbox.height,
-        ];
+        let corners = [bbox.left, bbox.top, bbox.right(), bbox.bottom()];
         if !corners.iter().all(|v| v.is_finite()) {
             return Err(tracker_model::Error::NonFinite {
                 what: "detection box",
