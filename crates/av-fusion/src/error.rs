@@ -62,12 +62,14 @@ pub enum Error {
     /// An error scoring tracks against the truth (the road scene's runs).
     #[error(transparent)]
     Eval(#[from] eval_metrics::Error),
-    /// A search's seeds hold the seed whose runs are reported.
-    #[error("{table}: the seeds hold the reported seed {seed}")]
-    ReportedSeed {
-        /// The parameter table whose seeds they are.
-        table: &'static str,
-        /// The reported seed.
+    /// Two seed lists that must be disjoint (tuning, fitting, reported, fresh) share a seed.
+    #[error("{first} and {second} share seed {seed}: seeds that choose settings are never reported")]
+    SharedSeed {
+        /// The first list's name.
+        first: &'static str,
+        /// The second list's name.
+        second: &'static str,
+        /// The shared seed.
         seed: u64,
     },
     /// A peak-score table is keyed by a name that is not one of the road scene's approaches.

@@ -378,6 +378,7 @@ const TUNERS: &[(&str, TuneFn)] = &[
         "mot-box-trackers",
         tune_typed::<pipelines::mot_box_trackers::MotBoxTrackers>,
     ),
+    ("av-fusion", tune_typed::<pipelines::av_fusion::AvFusion>),
 ];
 
 /// Re-runs the tuning searches of pipeline `name` on `params` (its tuning seeds only): the

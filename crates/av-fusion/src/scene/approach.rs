@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use crate::Modalities;
 
@@ -63,8 +63,7 @@ impl Approach {
         }
     }
 
-    /// The key in [`Params::settings`](super::Params::settings),
-    /// [`Params::multi_settings`](super::Params::multi_settings) and
+    /// The key of its settings ([`PerApproach`]'s field) and of
     /// [`Params::multi_peak_scores`](super::Params::multi_peak_scores): `audio_sum`, ...,
     /// `audio_video_product` (the fields of [`PerApproach`]).
     pub const fn settings_key(self) -> &'static str {
@@ -119,9 +118,9 @@ impl fmt::Display for Approach {
 }
 
 /// One value per approach, each a field named by the approach's
-/// [`settings_key`](Approach::settings_key) (so that a `[params.settings]` table deserialises
+/// [`settings_key`](Approach::settings_key) (so that a settings table deserialises
 /// into one; unknown fields are rejected).
-#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PerApproach<T> {
     /// Audio, weighted sum.

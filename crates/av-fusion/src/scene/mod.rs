@@ -24,11 +24,11 @@ use std::f64::consts::PI;
 use mcmcda::{McmcdaConfig, OnlineConfig};
 use sensors_audio::{BeamformConfig, MicArray};
 use sensors_video::{AngleProfiler, DetectionFilterConfig, MogConfig, PostConfig};
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 use tracker_model::{Region2, Vec2};
 
 use crate::error::invalid;
-use crate::tuning::{MultiTuning, ScoreFit, Tuning};
+use crate::tuning::{ScoreFit, Tuning};
 use crate::{
     AvConfig, Error, FusionConfig, FusionRule, LobeEqualisation, PeakExtraction, PeakScores,
     RangeFade, Result, SchedulerConfig, SensorNode, SumScaling, TrackerConfig,
@@ -41,7 +41,7 @@ mod sim;
 mod tests;
 
 pub use approach::{Approach, PerApproach};
-pub use score::{Score, score, score_with};
+pub use score::{Score, score_count_aware, score_with};
 pub use sim::{RunSpec, Simulated, Vehicle, audio_poses, cameras, clock_offset_s, simulate_run};
 
 /// Table 1: the region, m (x along the road, y across it).
@@ -127,10 +127,10 @@ pub struct VideoParams {
 }
 
 /// One approach's settings, chosen for that approach alone by a search on tuning seeds
-/// ([`crate::tuning`]). Weights w_s are a multiplier in the weighted sum and an exponent in the
+/// ([`crate::tuning::tune_one_config`]). Weights w_s are a multiplier in the weighted sum and an exponent in the
 /// product (w < 1 tempers, w > 1 sharpens a sensor's likelihood); a single-modality approach
 /// leaves the other modality's entries out (they would be unused; the default is 1).
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct ApproachSettings {
     /// Weight of the acoustic nodes.
@@ -193,9 +193,23 @@ fn one() -> f64 {
     1.0
 }
 
-/// The settings of the six approaches (`[params.settings]`, `[params.multi_settings]`: one
-/// table per approach, keyed by [`Approach::settings_key`]).
+/// The settings of the six approaches: one table per approach, keyed by
+/// [`Approach::settings_key`].
 pub type Settings = PerApproach<ApproachSettings>;
+
+/// The earlier, count-aware configuration, kept as a reference to compare with: one
+/// [`Settings`] for runs with one vehicle and another for runs with more, chosen by earlier
+/// per-count searches on the tuning seeds (docs/av-fusion.md). Choosing between them reads the
+/// true number of vehicles, which a deployment does not know, so the scenario's results use
+/// the one configuration of `cargo xtask tune av-fusion-road` instead.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CountAware {
+    /// For runs with one vehicle.
+    pub single: Settings,
+    /// For runs with more than one.
+    pub multi: Settings,
+}
 
 /// The scene, the approaches' settings and how they were chosen.
 #[derive(Debug, Clone, Deserialize)]
@@ -222,15 +236,11 @@ pub struct Params {
     /// Heading errors of the calibration sweep, degrees (applied to cameras and acoustic
     /// nodes alike).
     pub calibration_sweep_deg: Vec<f64>,
-    /// Each approach's own fusion weights, exponents, floor, peak threshold and NMS radius,
-    /// p_d and clutter rate (`[params.settings.<approach>]`), chosen by [`Tuning`]'s search.
-    pub settings: Settings,
-    /// Each approach's settings for the multi-vehicle runs (`[params.multi_settings]`),
-    /// chosen for it alone by [`MultiTuning`]'s search on the tuning seeds' multi-vehicle runs.
-    pub multi_settings: Settings,
-    /// Each approach's peak-score table for the multi-vehicle runs, keyed as the settings
-    /// are (`audio_sum`, ..., `audio_video_product`; an approach left out is unscored),
-    /// learnt on the tuning seeds by [`crate::tuning::fit_peak_scores`].
+    /// The earlier count-aware settings, a reference only (`[params.count_aware]`).
+    pub count_aware: CountAware,
+    /// Each approach's peak-score table, keyed as the settings are (`audio_sum`, ...,
+    /// `audio_video_product`; an approach left out is unscored), learnt on the tuning seeds'
+    /// multi-vehicle runs by [`crate::tuning::fit_peak_scores`].
     #[serde(default)]
     pub multi_peak_scores: BTreeMap<String, PeakScores>,
     /// How `multi_peak_scores` are learnt.
@@ -246,10 +256,11 @@ pub struct Params {
     pub match_distance_m: f64,
     /// OSPA cut-off, m (order 1).
     pub ospa_cutoff_m: f64,
-    /// How `settings` were chosen.
+    /// The search behind the one configuration ([`crate::tuning::tune_one_config`]).
     pub tuning: Tuning,
-    /// How `multi_settings` were chosen.
-    pub multi_tuning: MultiTuning,
+    /// Fresh seeds: generated once after the settings were frozen and never used to choose
+    /// anything (disjoint from every other seed list and from the reported seed).
+    pub fresh_seeds: Vec<u64>,
 }
 
 /// Heading errors of a run: acoustic nodes and cameras, degrees (signs alternate by node).
@@ -305,17 +316,17 @@ pub fn sensor_nodes(
     Ok(nodes)
 }
 
-/// Approach `a`'s settings for a run with one vehicle (`multi` false) or several.
-pub fn settings_of(p: &Params, a: Approach, multi: bool) -> &ApproachSettings {
+/// Approach `a`'s count-aware reference settings for a run with one vehicle (`multi` false)
+/// or several: the choice reads the true count ([`CountAware`]).
+pub fn count_aware_of(p: &Params, a: Approach, multi: bool) -> &ApproachSettings {
     if multi {
-        p.multi_settings.get(a)
+        p.count_aware.multi.get(a)
     } else {
-        p.settings.get(a)
+        p.count_aware.single.get(a)
     }
 }
 
-/// Approach `a`'s peak scores under settings `s` (none unless `s.scored`; only the
-/// multi-vehicle runs have tables).
+/// Approach `a`'s peak scores under settings `s` (none unless `s.scored`).
 pub fn peak_scores_of<'p>(
     p: &'p Params,
     a: Approach,
@@ -431,20 +442,13 @@ pub fn run_specs(p: &Params) -> Result<Vec<RunSpec>> {
     Ok(runs)
 }
 
-/// Checks the parameters before any run: passes, the tuning seeds apart from the reported
-/// `seed`, the multi-vehicle beamformer, the peak-score tables and every approach's settings.
+/// Checks the parameters before any run: passes and sizes, the seed lists (tuning, fitting,
+/// reported `seed`, fresh) pairwise disjoint, the multi-vehicle beamformer, the peak-score
+/// tables and the count-aware reference settings. The one configuration the results use is
+/// checked by [`check_settings`].
 pub fn check_params(p: &Params, seed: u64) -> Result<()> {
     check_sizes(p)?;
-    // Everything chosen or learnt on seeds is chosen on seeds other than the reported one.
-    for (table, seeds) in [
-        ("[params.tuning]", &p.tuning.seeds),
-        ("[params.multi_tuning]", &p.multi_tuning.seeds),
-        ("[params.score_fit]", &p.score_fit.seeds),
-    ] {
-        if seeds.contains(&seed) {
-            return Err(Error::ReportedSeed { table, seed });
-        }
-    }
+    check_seeds(p, seed)?;
     check_multi_beamform(&p.audio)?;
     for (k, table) in &p.multi_peak_scores {
         if Approach::from_settings_key(k).is_none() {
@@ -460,21 +464,66 @@ pub fn check_params(p: &Params, seed: u64) -> Result<()> {
         })?;
     }
     for a in Approach::ALL {
-        // The tables are learnt on multi-vehicle runs, for those runs only.
-        if p.settings.get(a).scored {
+        // The count-aware single-vehicle settings were chosen without the tables.
+        if p.count_aware.single.get(a).scored {
             return Err(invalid(
                 "scored",
                 format!(
-                    "[params.settings.{}]: scored is for the multi-vehicle settings only",
+                    "[params.count_aware.single.{}]: the single-vehicle reference is unscored",
                     a.settings_key()
                 ),
             ));
         }
-        for multi in [false, true] {
-            let s = settings_of(p, a, multi);
-            av_config(p, a, s, peak_scores_of(p, a, s)?)?.check()?;
-            for n in sensor_nodes(p, nominal(p), s)? {
-                n.check()?;
+    }
+    check_settings(p, &p.count_aware.single)?;
+    check_settings(p, &p.count_aware.multi)
+}
+
+/// Checks every approach's settings of `settings` against the scene: the fusion, peak and
+/// tracker configuration they make, its peak-score table where scored, and every node.
+pub fn check_settings(p: &Params, settings: &Settings) -> Result<()> {
+    for (a, s) in settings.iter() {
+        av_config(p, a, s, peak_scores_of(p, a, s)?)?.check()?;
+        for n in sensor_nodes(p, nominal(p), s)? {
+            n.check()?;
+        }
+    }
+    Ok(())
+}
+
+/// The most seeds a seed list may hold (each seed is a set of simulated runs).
+pub const MAX_SEEDS: usize = 64;
+
+/// The seeds that choose (tuning and score fitting), the reported seed and the fresh seeds
+/// pairwise disjoint; each list at most [`MAX_SEEDS`], and tuning and fresh seeds not empty.
+fn check_seeds(p: &Params, seed: u64) -> Result<()> {
+    let choosing: Vec<u64> = p.tuning.seeds.iter().chain(&p.score_fit.seeds).copied().collect();
+    for (name, len) in [
+        ("[params.tuning] seeds", p.tuning.seeds.len()),
+        ("[params.score_fit] seeds", p.score_fit.seeds.len()),
+        ("fresh_seeds", p.fresh_seeds.len()),
+    ] {
+        if len == 0 || len > MAX_SEEDS {
+            return Err(invalid(
+                "seeds",
+                format!("{name}: {len} seeds; 1 to {MAX_SEEDS}"),
+            ));
+        }
+    }
+    let reported = [seed];
+    let lists: [(&'static str, &[u64]); 3] = [
+        ("the tuning and fitting seeds", &choosing),
+        ("the reported seed", &reported),
+        ("fresh_seeds", &p.fresh_seeds),
+    ];
+    for (i, (first, a)) in lists.iter().enumerate() {
+        for (second, b) in &lists[i + 1..] {
+            if let Some(&shared) = a.iter().find(|s| b.contains(s)) {
+                return Err(Error::SharedSeed {
+                    first,
+                    second,
+                    seed: shared,
+                });
             }
         }
     }

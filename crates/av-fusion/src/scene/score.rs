@@ -9,7 +9,7 @@ use eval_metrics::{
 
 use super::{
     Approach, ApproachSettings, Calibration, Params, Simulated, av_config, peak_scores_of,
-    sensor_nodes, settings_of,
+    sensor_nodes, count_aware_of,
 };
 use crate::{AvRun, PeakScores, Result, track_reports};
 
@@ -81,9 +81,15 @@ pub fn score_with(
     })
 }
 
-/// Approach `a` on one simulated run with its own settings for the run's vehicle count (and
-/// their peak scores).
-pub fn score(p: &Params, sim: &Simulated, calib: Calibration, a: Approach) -> Result<Score> {
-    let s = settings_of(p, a, sim.multi);
+/// Approach `a` on one simulated run with its count-aware reference settings for the run's
+/// true vehicle count (and their peak scores): the comparison the one configuration is
+/// measured against ([`CountAware`](super::CountAware)).
+pub fn score_count_aware(
+    p: &Params,
+    sim: &Simulated,
+    calib: Calibration,
+    a: Approach,
+) -> Result<Score> {
+    let s = count_aware_of(p, a, sim.multi);
     score_with(p, sim, calib, a, s, peak_scores_of(p, a, s)?)
 }

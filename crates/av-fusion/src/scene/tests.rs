@@ -11,7 +11,7 @@ use super::*;
 fn committed() -> Params {
     let text = include_str!("../../../../fixtures/scenarios/av-fusion-road.toml");
     let table: toml::Table = toml::from_str(text).expect("the configuration parses");
-    table["params"]
+    table["params"]["scene"]
         .clone()
         .try_into()
         .expect("its parameters parse")
@@ -80,11 +80,14 @@ fn bad_score_settings_and_reused_seeds_are_rejected_before_any_run() {
     p.multi_peak_scores.insert("audio_and_video".into(), any);
     let err = rejected(&p, 1801);
     assert!(err.contains("unknown approach"), "{err}");
-    // Scores in the single-vehicle settings.
+    // Scores in the count-aware single-vehicle reference.
     let mut p = good.clone();
-    p.settings.get_mut(Approach::AudioVideoProduct).scored = true;
+    p.count_aware
+        .single
+        .get_mut(Approach::AudioVideoProduct)
+        .scored = true;
     let err = rejected(&p, 1801);
-    assert!(err.contains("multi-vehicle settings only"), "{err}");
+    assert!(err.contains("reference is unscored"), "{err}");
     // A multi-vehicle beamformer with other beams, or a bad one.
     let mut p = good.clone();
     p.audio.multi_beamform = Some(BeamformConfig {
@@ -100,9 +103,24 @@ fn bad_score_settings_and_reused_seeds_are_rejected_before_any_run() {
     });
     let err = rejected(&p, 1801);
     assert!(err.contains("mvdr_forgetting"), "{err}");
-    // The reported seed among the tuning seeds.
+    // The reported seed among the tuning seeds, a fresh seed among them or reported.
     let err = rejected(&good, 2);
-    assert!(err.contains("reported seed 2"), "{err}");
+    assert!(
+        err.contains("tuning and fitting seeds and the reported seed share seed 2"),
+        "{err}"
+    );
+    let mut p = good.clone();
+    p.fresh_seeds.push(3);
+    let err = rejected(&p, 1801);
+    assert!(err.contains("fresh_seeds share seed 3"), "{err}");
+    let err = rejected(&good, good.fresh_seeds[0]);
+    assert!(err.contains("the reported seed and fresh_seeds share"), "{err}");
+    // No fresh seeds, or more than the bound.
+    let mut p = good.clone();
+    p.fresh_seeds.clear();
+    assert!(rejected(&p, 1801).contains("fresh_seeds: 0 seeds"));
+    p.fresh_seeds = (10_000..10_000 + MAX_SEEDS as u64 + 1).collect();
+    assert!(rejected(&p, 1801).contains(&format!("{} seeds; 1 to {MAX_SEEDS}", MAX_SEEDS + 1)));
 }
 
 #[test]
@@ -168,16 +186,20 @@ fn per_approach_values_are_keyed_by_approach() {
     assert_eq!(failed, Err(Approach::AudioProduct));
     // The committed settings tables are keyed by the approaches' settings keys.
     let p = committed();
-    assert!(
-        p.settings
-            .get(Approach::AudioVideoProduct)
-            .product_floor
-            .is_some()
-    );
-    assert!(
-        p.settings
-            .get(Approach::AudioVideoSum)
-            .product_floor
-            .is_none()
-    );
+    let single = &p.count_aware.single;
+    assert!(single.get(Approach::AudioVideoProduct).product_floor.is_some());
+    assert!(single.get(Approach::AudioVideoSum).product_floor.is_none());
+}
+
+#[test]
+fn settings_round_trip_through_toml() {
+    // The one configuration's file is written by serialising a `Settings`; it must read back
+    // to the same values, to the bit, with absent options left out.
+    let p = committed();
+    for settings in [&p.count_aware.single, &p.count_aware.multi] {
+        let text = toml::to_string(&toml::Table::try_from(settings).expect("serialises"))
+            .expect("writes");
+        let back: Settings = toml::from_str(&text).expect("reads back");
+        assert_eq!(&back, settings, "{text}");
+    }
 }

@@ -4,17 +4,18 @@ use rayon::prelude::*;
 
 use super::{Log, ScoreFit, Seeded, peak_counts, simulate_multi, simulate_multi_all, vehicles_at};
 use crate::error::invalid;
-use crate::scene::{Approach, Params, RunSpec, Simulated, nominal, score, score_with};
+use crate::scene::{Approach, Params, RunSpec, Settings, Simulated, nominal, peak_scores_of, score_with};
 use crate::{PeakScores, Result};
 
-/// The score tables of [`Params::multi_peak_scores`] for the approaches `which`, learnt as [`ScoreFit`] says on the multi-vehicle runs of the seeds of
-/// `seeded`, each printed to `log` as TOML with its counts. For each approach, with its
-/// multi-vehicle settings (but `max_peaks` peaks per tick, unscored), every peak is labelled
+/// The score tables of [`Params::multi_peak_scores`] for the approaches `which`, learnt as
+/// [`ScoreFit`] says on the multi-vehicle runs of the seeds of `seeded`, each printed to `log`
+/// as TOML with its counts. For each approach, with its count-aware multi-vehicle settings
+/// (but `max_peaks` peaks per tick, unscored), every peak is labelled
 /// by whether a vehicle is within `near_m` at its tick (the truth of calibration runs, as a
 /// detector's confidence is calibrated on labelled data; the reported seed is never simulated
-/// here), and [`score_table`] bins their contrasts. The tables are fitted with the
-/// multi-vehicle settings as configured: fit, paste, search ([`tune_multi`](super::tune_multi)),
-/// paste, and fit again until neither moves.
+/// here), and [`score_table`] bins their contrasts. The committed tables were fitted in turns
+/// with the count-aware searches (docs/av-fusion.md); the one configuration's search
+/// ([`tune_one_config`](super::tune_one_config)) uses them as committed.
 pub fn fit_peak_scores(
     p: &Params,
     runs: &[RunSpec],
@@ -26,7 +27,7 @@ pub fn fit_peak_scores(
     check_score_fit(f)?;
     let sims = simulate_multi_all(p, runs, seeded)?;
     for &a in which {
-        let mut s = *p.multi_settings.get(a);
+        let mut s = *p.count_aware.multi.get(a);
         s.max_peaks = Some(f.max_peaks);
         s.scored = false;
         // (contrast, near a vehicle) of every peak of every run.
@@ -128,15 +129,22 @@ fn totals(counts: &[[usize; 2]]) -> [usize; 2] {
 }
 
 /// Where the multi-vehicle runs' MOTA errors come from: for each seed of `seeded`, each
-/// multi-vehicle run and each approach (with its configured settings), a line to `log` with
+/// multi-vehicle run and each approach (with its settings of `settings`), a line to `log` with
 /// MOTA, OSPA, the CLEAR MOT counts, the tracks, each vehicle's ticks with a peak within 2 m
 /// and the peaks farther than 2 m from every vehicle.
-pub fn diagnose(p: &Params, runs: &[RunSpec], seeded: &Seeded, log: &dyn Log) -> Result<()> {
+pub fn diagnose(
+    p: &Params,
+    settings: &Settings,
+    runs: &[RunSpec],
+    seeded: &Seeded,
+    log: &dyn Log,
+) -> Result<()> {
     for (seed, base) in seeded {
         let sims = simulate_multi(p, runs, base)?;
         for (r, sim) in sims.iter().enumerate() {
             for a in Approach::ALL {
-                log.say(&format!("seed {seed} run {r} {}", diagnosis(p, sim, a)?));
+                let line = diagnosis(p, sim, a, settings.get(a))?;
+                log.say(&format!("seed {seed} run {r} {line}"));
             }
         }
     }
@@ -144,8 +152,13 @@ pub fn diagnose(p: &Params, runs: &[RunSpec], seeded: &Seeded, log: &dyn Log) ->
 }
 
 /// Approach `a` on one multi-vehicle run: its line of [`diagnose`] after the seed and run.
-fn diagnosis(p: &Params, sim: &Simulated, a: Approach) -> Result<String> {
-    let s = score(p, sim, nominal(p), a)?;
+fn diagnosis(
+    p: &Params,
+    sim: &Simulated,
+    a: Approach,
+    settings: &crate::scene::ApproachSettings,
+) -> Result<String> {
+    let s = score_with(p, sim, nominal(p), a, settings, peak_scores_of(p, a, settings)?)?;
     let c = &s.clear;
     let mut per_vehicle = Vec::new();
     for g in sim.gt.tracks() {

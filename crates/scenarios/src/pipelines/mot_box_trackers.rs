@@ -271,7 +271,13 @@ impl Pipeline for MotBoxTrackers {
             .map(|c| {
                 let expected = out.params.fresh_verdicts[&c.key()];
                 let n = out.params.sequences.len();
-                verdict_claim(&c.statement(), n, &c.paired(&out.tuned), 0.0, expected)
+                verdict_claim(
+                    &c.statement(),
+                    &format!("the {n} fresh sequences"),
+                    &c.paired(&out.tuned),
+                    0.0,
+                    expected,
+                )
             })
             .collect()
     }

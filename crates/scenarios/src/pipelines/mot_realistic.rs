@@ -668,7 +668,7 @@ impl Pipeline for MotRealistic {
                 let expected = out.params.fresh_verdicts[o.key];
                 verdict_claim(
                     &o.statement(),
-                    fresh.specs.len(),
+                    &format!("the {} fresh sequences", fresh.specs.len()),
                     &paired,
                     o.margin,
                     expected,
@@ -707,11 +707,12 @@ impl Pipeline for MotRealistic {
     }
 }
 
-/// The claim that `statement`'s verdict on `n` fresh sequences (its paired interval against
-/// `margin`) is still the `expected` one, recorded from their first run.
+/// The claim that `statement`'s verdict on `fresh` (the fresh units, e.g. "the 8 fresh
+/// sequences"; its paired interval against `margin`) is still the `expected` one, recorded
+/// from their first run.
 pub(crate) fn verdict_claim(
     statement: &str,
-    n: usize,
+    fresh: &str,
     paired: &Paired,
     margin: f64,
     expected: Verdict,
@@ -719,8 +720,7 @@ pub(crate) fn verdict_claim(
     let verdict = Verdict::of(paired, margin);
     Claim::new(
         format!(
-            "{statement} on the {n} fresh sequences: difference {} (95 % paired t) — {} \
-             (recorded: {})",
+            "{statement} on {fresh}: difference {} (95 % paired t) — {} (recorded: {})",
             paired.show(),
             verdict.name(),
             expected.name()
