@@ -63,7 +63,9 @@ pub enum Error {
     #[error(transparent)]
     Eval(#[from] eval_metrics::Error),
     /// Two seed lists that must be disjoint (tuning, fitting, reported, fresh) share a seed.
-    #[error("{first} and {second} share seed {seed}: seeds that choose settings are never reported")]
+    #[error(
+        "{first} and {second} share seed {seed}: seeds that choose settings are never reported"
+    )]
     SharedSeed {
         /// The first list's name.
         first: &'static str,

@@ -497,7 +497,13 @@ pub const MAX_SEEDS: usize = 64;
 /// The seeds that choose (tuning and score fitting), the reported seed and the fresh seeds
 /// pairwise disjoint; each list at most [`MAX_SEEDS`], and tuning and fresh seeds not empty.
 fn check_seeds(p: &Params, seed: u64) -> Result<()> {
-    let choosing: Vec<u64> = p.tuning.seeds.iter().chain(&p.score_fit.seeds).copied().collect();
+    let choosing: Vec<u64> = p
+        .tuning
+        .seeds
+        .iter()
+        .chain(&p.score_fit.seeds)
+        .copied()
+        .collect();
     for (name, len) in [
         ("[params.tuning] seeds", p.tuning.seeds.len()),
         ("[params.score_fit] seeds", p.score_fit.seeds.len()),

@@ -8,8 +8,8 @@ use eval_metrics::{
 };
 
 use super::{
-    Approach, ApproachSettings, Calibration, Params, Simulated, av_config, peak_scores_of,
-    sensor_nodes, count_aware_of,
+    Approach, ApproachSettings, Calibration, Params, Simulated, av_config, count_aware_of,
+    peak_scores_of, sensor_nodes,
 };
 use crate::{AvRun, PeakScores, Result, track_reports};
 

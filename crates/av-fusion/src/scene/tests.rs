@@ -114,7 +114,10 @@ fn bad_score_settings_and_reused_seeds_are_rejected_before_any_run() {
     let err = rejected(&p, 1801);
     assert!(err.contains("fresh_seeds share seed 3"), "{err}");
     let err = rejected(&good, good.fresh_seeds[0]);
-    assert!(err.contains("the reported seed and fresh_seeds share"), "{err}");
+    assert!(
+        err.contains("the reported seed and fresh_seeds share"),
+        "{err}"
+    );
     // No fresh seeds, or more than the bound.
     let mut p = good.clone();
     p.fresh_seeds.clear();
@@ -187,7 +190,12 @@ fn per_approach_values_are_keyed_by_approach() {
     // The committed settings tables are keyed by the approaches' settings keys.
     let p = committed();
     let single = &p.count_aware.single;
-    assert!(single.get(Approach::AudioVideoProduct).product_floor.is_some());
+    assert!(
+        single
+            .get(Approach::AudioVideoProduct)
+            .product_floor
+            .is_some()
+    );
     assert!(single.get(Approach::AudioVideoSum).product_floor.is_none());
 }
 
@@ -197,8 +205,8 @@ fn settings_round_trip_through_toml() {
     // to the same values, to the bit, with absent options left out.
     let p = committed();
     for settings in [&p.count_aware.single, &p.count_aware.multi] {
-        let text = toml::to_string(&toml::Table::try_from(settings).expect("serialises"))
-            .expect("writes");
+        let text =
+            toml::to_string(&toml::Table::try_from(settings).expect("serialises")).expect("writes");
         let back: Settings = toml::from_str(&text).expect("reads back");
         assert_eq!(&back, settings, "{text}");
     }

@@ -13,9 +13,7 @@ use rayon::prelude::*;
 use serde::Deserialize;
 use tracker_model::Vec2;
 
-use crate::scene::{
-    Approach, Params, RunSpec, Simulated, simulate_run,
-};
+use crate::scene::{Approach, Params, RunSpec, Simulated, simulate_run};
 use crate::{AvRun, Error, Result};
 
 mod scores;

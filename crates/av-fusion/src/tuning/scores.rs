@@ -4,7 +4,9 @@ use rayon::prelude::*;
 
 use super::{Log, ScoreFit, Seeded, peak_counts, simulate_multi, simulate_multi_all, vehicles_at};
 use crate::error::invalid;
-use crate::scene::{Approach, Params, RunSpec, Settings, Simulated, nominal, peak_scores_of, score_with};
+use crate::scene::{
+    Approach, Params, RunSpec, Settings, Simulated, nominal, peak_scores_of, score_with,
+};
 use crate::{PeakScores, Result};
 
 /// The score tables of [`Params::multi_peak_scores`] for the approaches `which`, learnt as
@@ -158,7 +160,14 @@ fn diagnosis(
     a: Approach,
     settings: &crate::scene::ApproachSettings,
 ) -> Result<String> {
-    let s = score_with(p, sim, nominal(p), a, settings, peak_scores_of(p, a, settings)?)?;
+    let s = score_with(
+        p,
+        sim,
+        nominal(p),
+        a,
+        settings,
+        peak_scores_of(p, a, settings)?,
+    )?;
     let c = &s.clear;
     let mut per_vehicle = Vec::new();
     for g in sim.gt.tracks() {

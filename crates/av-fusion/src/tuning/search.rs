@@ -96,15 +96,27 @@ pub fn objective(
         .par_iter()
         .map(|sim| {
             let r = score_with(p, sim, nominal(p), a, s, table)?;
-            let errors = r.errors.iter().map(|e| e.unwrap_or(p.match_distance_m)).collect();
+            let errors = r
+                .errors
+                .iter()
+                .map(|e| e.unwrap_or(p.match_distance_m))
+                .collect();
             Ok((sim.multi, r.mota, errors))
         })
         .collect::<Result<_>>()?;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     let mota_of = |multi: bool| -> Vec<f64> {
-        scored.iter().filter(|r| r.0 == multi).map(|r| r.1).collect()
+        scored
+            .iter()
+            .filter(|r| r.0 == multi)
+            .map(|r| r.1)
+            .collect()
     };
-    let errors: Vec<f64> = scored.iter().filter(|r| !r.0).flat_map(|r| r.2.clone()).collect();
+    let errors: Vec<f64> = scored
+        .iter()
+        .filter(|r| !r.0)
+        .flat_map(|r| r.2.clone())
+        .collect();
     let (single_mota, multi_mota, error_m) =
         (mean(&mota_of(false)), mean(&mota_of(true)), mean(&errors));
     Ok(ObjectiveParts {
@@ -162,7 +174,11 @@ fn tune_approach(
             kept,
         });
     }
-    let start = if from_single { (single, js) } else { (multi, jm) };
+    let start = if from_single {
+        (single, js)
+    } else {
+        (multi, jm)
+    };
     let coords = coordinates(p, a);
     let (end, score) = coordinate_search(a, start, &coords, p.tuning.max_rounds, &j, rows)?;
     log.say(&format!("{a}: chosen, J {score:.4}: {end:?}"));

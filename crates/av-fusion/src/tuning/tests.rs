@@ -77,7 +77,9 @@ fn some_settings() -> ApproachSettings {
 fn coordinate_search_finds_a_separable_optimum_and_keeps_ties() {
     use super::search::{Coordinate, coordinate_search};
     let coords: Vec<Coordinate> = vec![
-        ("kappa", vec![0.1, 0.3, 0.5], |s, v| s.relative_threshold = v),
+        ("kappa", vec![0.1, 0.3, 0.5], |s, v| {
+            s.relative_threshold = v
+        }),
         ("p_d", vec![0.6, 0.8, 0.95], |s, v| s.p_detect = v),
     ];
     // Brute force over the 3 × 3 grid of a separable objective: κ = 0.3, p_d = 0.8.
@@ -86,25 +88,46 @@ fn coordinate_search_finds_a_separable_optimum_and_keeps_ties() {
     };
     let start = some_settings();
     let mut rows = Vec::new();
-    let (end, score) =
-        coordinate_search(Approach::AudioProduct, (start, j(&start).expect("j")), &coords, 3, &j, &mut rows)
-            .expect("searches");
+    let (end, score) = coordinate_search(
+        Approach::AudioProduct,
+        (start, j(&start).expect("j")),
+        &coords,
+        3,
+        &j,
+        &mut rows,
+    )
+    .expect("searches");
     assert_eq!((end.relative_threshold, end.p_detect), (0.3, 0.8));
-    assert_eq!(score, 0.0);
+    assert!(score.abs() < 1e-15, "{score}");
     // Round 1 moves both coordinates, round 2 confirms them and stops: 12 rows, one kept per
     // step, the kept ones the optimum's values.
     assert_eq!(rows.len(), 12);
-    let kept: Vec<(usize, &str, f64)> =
-        rows.iter().filter(|r| r.kept).map(|r| (r.round, r.coordinate, r.value)).collect();
+    let kept: Vec<(usize, &str, f64)> = rows
+        .iter()
+        .filter(|r| r.kept)
+        .map(|r| (r.round, r.coordinate, r.value))
+        .collect();
     assert_eq!(
         kept,
-        vec![(1, "kappa", 0.3), (1, "p_d", 0.8), (2, "kappa", 0.3), (2, "p_d", 0.8)]
+        vec![
+            (1, "kappa", 0.3),
+            (1, "p_d", 0.8),
+            (2, "kappa", 0.3),
+            (2, "p_d", 0.8)
+        ]
     );
     // A flat objective never moves the start.
     let flat = |_: &ApproachSettings| -> Result<f64> { Ok(1.0) };
     let mut rows = Vec::new();
-    let (end, _) = coordinate_search(Approach::AudioProduct, (start, 1.0), &coords, 3, &flat, &mut rows)
-        .expect("searches");
+    let (end, _) = coordinate_search(
+        Approach::AudioProduct,
+        (start, 1.0),
+        &coords,
+        3,
+        &flat,
+        &mut rows,
+    )
+    .expect("searches");
     assert_eq!(end, start);
     assert_eq!(rows.len(), 6, "one round: nothing changed");
 }

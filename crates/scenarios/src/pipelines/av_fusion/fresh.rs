@@ -79,10 +79,13 @@ impl Fresh {
     }
 
     fn of(&self, multi: bool, a: Approach, config: Config) -> impl Iterator<Item = &Scored> {
-        self.runs.iter().filter(move |r| r.multi == multi).map(move |r| match config {
-            Config::One => r.one.get(a),
-            Config::CountAware => r.count_aware.get(a),
-        })
+        self.runs
+            .iter()
+            .filter(move |r| r.multi == multi)
+            .map(move |r| match config {
+                Config::One => r.one.get(a),
+                Config::CountAware => r.count_aware.get(a),
+            })
     }
 
     /// The pass errors at the sweep's first (`end` 0) or last heading error of the audio (0)
@@ -105,19 +108,17 @@ impl Fresh {
 
 /// Every run of every fresh seed, scored; run i of a seed on stream i of the generator seeded
 /// by it, as the reported runs draw theirs.
-pub(super) fn run(
-    p: &Params,
-    one: &Settings,
-    runs: &[RunSpec],
-    env: &Env<'_>,
-) -> Result<Fresh> {
+pub(super) fn run(p: &Params, one: &Settings, runs: &[RunSpec], env: &Env<'_>) -> Result<Fresh> {
     let scene = &p.scene;
     let jobs: Vec<(u64, usize)> = scene
         .fresh_seeds
         .iter()
         .flat_map(|&s| (0..runs.len()).map(move |i| (s, i)))
         .collect();
-    let sweep_deg = match (scene.calibration_sweep_deg.first(), scene.calibration_sweep_deg.last()) {
+    let sweep_deg = match (
+        scene.calibration_sweep_deg.first(),
+        scene.calibration_sweep_deg.last(),
+    ) {
         (Some(&a), Some(&b)) if a < b => [a, b],
         _ => bail!("calibration_sweep_deg needs two heading errors, rising"),
     };
@@ -154,7 +155,10 @@ fn fresh_run(
     let scene = &p.scene;
     let sim = simulate_run(scene, run, rng)?;
     let cut = |errors: &[Option<f64>]| -> Vec<f64> {
-        errors.iter().map(|e| e.unwrap_or(scene.match_distance_m)).collect()
+        errors
+            .iter()
+            .map(|e| e.unwrap_or(scene.match_distance_m))
+            .collect()
     };
     let with_one = |a: Approach, calib: Calibration| -> Result<Scored> {
         let s = one.get(a);
@@ -182,7 +186,8 @@ fn fresh_run(
             };
             Ok(with_one(a, calib)?.errors[0])
         };
-        let ends = |a: Approach| -> Result<[f64; 2]> { Ok([at(a, sweep_deg[0])?, at(a, sweep_deg[1])?]) };
+        let ends =
+            |a: Approach| -> Result<[f64; 2]> { Ok([at(a, sweep_deg[0])?, at(a, sweep_deg[1])?]) };
         Some([ends(Approach::AudioProduct)?, ends(Approach::VideoProduct)?])
     };
     Ok(FreshRun {
@@ -223,7 +228,11 @@ fn comparisons(f: &Fresh) -> Vec<Comparison> {
         let both = Approach::new(av_fusion::Modalities::Both, product);
         for single in [av_fusion::Modalities::Audio, av_fusion::Modalities::Video] {
             let alone = Approach::new(single, product);
-            let who = if single == av_fusion::Modalities::Audio { "audio" } else { "video" };
+            let who = if single == av_fusion::Modalities::Audio {
+                "audio"
+            } else {
+                "video"
+            };
             out.push(Comparison {
                 key: format!("error_{rule}_av_vs_{who}"),
                 statement: format!("{rule} rule: audio+video's pass error ≤ {who} alone's"),
@@ -332,7 +341,11 @@ fn seed_range(seeds: &[u64]) -> String {
         (Some(a), Some(b)) if seeds.windows(2).all(|w| w[1] == w[0] + 1) && a != b => {
             format!("{a}–{b}")
         }
-        _ => seeds.iter().map(u64::to_string).collect::<Vec<_>>().join(", "),
+        _ => seeds
+            .iter()
+            .map(u64::to_string)
+            .collect::<Vec<_>>()
+            .join(", "),
     }
 }
 
@@ -448,7 +461,12 @@ pub(super) fn figures(f: &Fresh) -> Vec<Figure> {
             let offset = BAR_WIDTH * (k as f64 - 0.5);
             let means: Vec<(f64, MeanCi)> = Approach::ALL
                 .iter()
-                .map(|&a| ((a.index() + 1) as f64 + offset, MeanCi::of(values(a, config))))
+                .map(|&a| {
+                    (
+                        (a.index() + 1) as f64 + offset,
+                        MeanCi::of(values(a, config)),
+                    )
+                })
                 .collect();
             let bars = means.iter().map(|&(x, m)| (x, m.mean)).collect();
             series.push(Series::new(label, bars, Style::Bars, k));
@@ -469,13 +487,17 @@ pub(super) fn figures(f: &Fresh) -> Vec<Figure> {
             "fresh-mota",
             "Fresh seeds: mean multi-vehicle MOTA per approach with its 95 % interval (dark \
              lines), the one configuration beside the count-aware reference",
-            chart("Multi-vehicle MOTA, fresh seeds", "MOTA", &|a, c| f.multi_motas(a, c)),
+            chart("Multi-vehicle MOTA, fresh seeds", "MOTA", &|a, c| {
+                f.multi_motas(a, c)
+            }),
         ),
         Figure::new(
             "fresh-error",
             "Fresh seeds: mean pass error per approach with its 95 % interval (dark lines), \
              the one configuration beside the count-aware reference",
-            chart("Pass error, fresh seeds", "mean error (m)", &|a, c| f.pass_errors(a, c)),
+            chart("Pass error, fresh seeds", "mean error (m)", &|a, c| {
+                f.pass_errors(a, c)
+            }),
         ),
     ]
 }

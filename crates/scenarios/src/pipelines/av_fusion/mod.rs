@@ -24,9 +24,9 @@ use std::collections::BTreeMap;
 
 use anyhow::{Context, Result};
 use av_fusion::scene::{
-    Approach, ApproachSettings, Calibration, MPS_PER_MPH, PerApproach, REGION_M, RunSpec,
-    Settings, Simulated, check_params, check_settings, nominal, peak_scores_of, run_specs,
-    score_count_aware, score_with, sensor_nodes, simulate_run,
+    Approach, ApproachSettings, Calibration, MPS_PER_MPH, PerApproach, REGION_M, RunSpec, Settings,
+    Simulated, check_params, check_settings, nominal, peak_scores_of, run_specs, score_count_aware,
+    score_with, sensor_nodes, simulate_run,
 };
 use av_fusion::{Modalities, SensorKind};
 use rand::SeedableRng;
@@ -425,7 +425,7 @@ impl Pipeline for AvFusion {
                 chosen: r.kept,
             })
             .collect();
-        let table = toml::Table::try_from(&settings)?;
+        let table = toml::Table::try_from(settings)?;
         Ok(Some(Tuned {
             settings: settings_file(&tuned_header(p), &table)?,
             grid: grid_csv(&grid),
@@ -559,9 +559,9 @@ fn per_pass_table(out: &Output) -> Table {
         ),
     ] {
         let mut gain_row = vec![label.into(), String::new(), String::new()];
-        gain_row.extend(Approach::ALL.map(|a| {
-            fusion_gain(out, a, over).map_or(String::new(), |g| g.show())
-        }));
+        gain_row.extend(
+            Approach::ALL.map(|a| fusion_gain(out, a, over).map_or(String::new(), |g| g.show())),
+        );
         per_pass.row(gain_row);
     }
     per_pass
