@@ -276,7 +276,7 @@ impl Pipeline for MotBoxTrackers {
                     &format!("the {n} fresh sequences"),
                     &c.paired(&out.tuned),
                     0.0,
-                    expected,
+                    Some(expected),
                 )
             })
             .collect()

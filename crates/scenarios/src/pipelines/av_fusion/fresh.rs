@@ -319,18 +319,13 @@ pub(super) fn claims(f: &Fresh) -> Vec<Claim> {
                 c.units,
                 seed_range(&f.seeds)
             );
-            match f.verdicts.get(&c.key) {
-                Some(&expected) => verdict_claim(&c.statement, &fresh, &c.paired(), 0.0, expected),
-                None => Claim::new(
-                    format!(
-                        "{} on {fresh}: {} — no verdict recorded for {:?}",
-                        c.statement,
-                        Verdict::of(&c.paired(), 0.0).name(),
-                        c.key
-                    ),
-                    false,
-                ),
-            }
+            verdict_claim(
+                &c.statement,
+                &fresh,
+                &c.paired(),
+                0.0,
+                f.verdicts.get(&c.key).copied(),
+            )
         })
         .collect()
 }
@@ -350,7 +345,8 @@ fn seed_range(seeds: &[u64]) -> String {
 }
 
 /// The metrics of the fresh runs: per approach and configuration the mean pass error and
-/// multi-vehicle MOTA with their 95 % half-widths, and every comparison's interval.
+/// multi-vehicle MOTA with their 95 % half-widths, every comparison's interval and the
+/// verdicts' tally.
 pub(super) fn metrics(f: &Fresh, m: &mut crate::Metrics, key_of: fn(Approach) -> String) {
     for a in Approach::ALL {
         let key = key_of(a);
@@ -369,6 +365,10 @@ pub(super) fn metrics(f: &Fresh, m: &mut crate::Metrics, key_of: fn(Approach) ->
         m.insert(format!("fresh_{}_low", c.key), p.low);
         m.insert(format!("fresh_{}_high", c.key), p.high);
     }
+    let [h, u, l] = tally(f);
+    m.insert("fresh_holds".into(), h as f64);
+    m.insert("fresh_undecided".into(), u as f64);
+    m.insert("fresh_loses".into(), l as f64);
 }
 
 /// Per approach: the mean pass error and multi-vehicle MOTA (± 95 % CI) under the one

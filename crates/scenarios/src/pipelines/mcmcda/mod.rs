@@ -31,6 +31,7 @@ use tracker_model::{ConstantVelocity2, CvNoise, Scan, SimulationConfig, TrackSet
 use crate::{Clock, Env};
 
 mod batch;
+mod fresh;
 mod online;
 mod sweep;
 
@@ -291,7 +292,6 @@ fn tune(
     tuning: &Tuning,
 ) -> Result<Vec<Vec<Tuned>>> {
     anyhow::ensure!(tuning.runs > 0, "tuning.runs must be positive");
-    crate::seeds::check_disjoint(&[("tuning", &[tuning.seed]), ("reported", &[env.seed])])?;
     let candidates = tuning.candidates(&trackers.gnn);
     anyhow::ensure!(!candidates.is_empty(), "no GNN candidates to tune");
     let base = ChaCha8Rng::seed_from_u64(tuning.seed);
@@ -421,31 +421,51 @@ fn run_once(
     Ok(out)
 }
 
-/// Tunes GNN, then runs `run_once` for every (setting, run) in parallel, each on its own
-/// stream of `base`. Returns the tuned settings [setting][variant] and the runs, setting by
-/// setting.
+/// The seeds of one experiment: the reported scenarios' generator, and the fresh seed whose
+/// scenarios carry the claims.
+pub(crate) struct Seeds<'a> {
+    /// The reported scenarios' generator (from the scenario's seed).
+    pub reported: &'a ChaCha8Rng,
+    /// The fresh scenarios' seed.
+    pub fresh: u64,
+}
+
+/// Tunes GNN, then runs `run_once` for every (set, setting, run) in parallel, the reported
+/// set on the streams of `seeds.reported`, the fresh set on those of ChaCha8(`seeds.fresh`).
+/// Returns the tuned settings [setting][variant] and each set's runs, setting by setting.
 fn run_grid(
-    base: &ChaCha8Rng,
+    seeds: &Seeds<'_>,
     env: &Env<'_>,
     settings: &[(SimulationConfig, u32)],
     runs: usize,
     variants: &[Variant],
     trackers: &Trackers,
     tuning: &Tuning,
-) -> Result<(Vec<Vec<Tuned>>, Vec<RunScores>)> {
+) -> Result<(Vec<Vec<Tuned>>, [Vec<RunScores>; 2])> {
     anyhow::ensure!(
         runs > 0 && !settings.is_empty() && variants.first() == Some(&Variant::Truth),
         "runs and settings must be non-empty, and the first variant the true model"
     );
+    crate::seeds::check_disjoint(&[
+        ("tuning", &[tuning.seed]),
+        ("reported", &[env.seed]),
+        ("fresh", &[seeds.fresh]),
+    ])?;
     env.progress
-        .set_length((settings.len() * (runs + tuning.runs)) as u64);
+        .set_length((settings.len() * (2 * runs + tuning.runs)) as u64);
     let tuned = tune(env, settings, variants, trackers, tuning)?;
-    let results = (0..settings.len() * runs)
+    let fresh = ChaCha8Rng::seed_from_u64(seeds.fresh);
+    let n = settings.len() * runs;
+    let mut all: Vec<RunScores> = (0..2 * n)
         .into_par_iter()
         .map(|task| {
-            let mut rng = base.clone();
-            rng.set_stream(task as u64);
-            let i = task / runs;
+            let mut rng = if task < n {
+                seeds.reported.clone()
+            } else {
+                fresh.clone()
+            };
+            rng.set_stream((task % n) as u64);
+            let i = (task % n) / runs;
             let (simulation, k) = &settings[i];
             let out = run_once(
                 simulation, trackers, *k, variants, &tuned[i], &mut rng, env.clock,
@@ -454,7 +474,8 @@ fn run_grid(
             out
         })
         .collect::<Result<_>>()?;
-    Ok((tuned, results))
+    let fresh_runs = all.split_off(n);
+    Ok((tuned, [all, fresh_runs]))
 }
 
 /// The end of a verdict sentence: where MCMCDA and the tuned GNN do not differ significantly,
