@@ -430,6 +430,9 @@ pub(crate) struct Seeds<'a> {
     pub fresh: u64,
 }
 
+/// The runs of the reported scenarios and of the fresh ones, setting by setting.
+type ReportedAndFresh = [Vec<RunScores>; 2];
+
 /// Tunes GNN, then runs `run_once` for every (set, setting, run) in parallel, the reported
 /// set on the streams of `seeds.reported`, the fresh set on those of ChaCha8(`seeds.fresh`).
 /// Returns the tuned settings [setting][variant] and each set's runs, setting by setting.
@@ -441,7 +444,7 @@ fn run_grid(
     variants: &[Variant],
     trackers: &Trackers,
     tuning: &Tuning,
-) -> Result<(Vec<Vec<Tuned>>, [Vec<RunScores>; 2])> {
+) -> Result<(Vec<Vec<Tuned>>, ReportedAndFresh)> {
     anyhow::ensure!(
         runs > 0 && !settings.is_empty() && variants.first() == Some(&Variant::Truth),
         "runs and settings must be non-empty, and the first variant the true model"
