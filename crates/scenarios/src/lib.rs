@@ -47,6 +47,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::de::DeserializeOwned;
 
+mod fresh;
 mod pipelines;
 mod report;
 pub mod seeds;

@@ -15,8 +15,8 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 
 use super::Params;
-use crate::pipelines::mot_realistic::verdict_claim;
-use crate::stats::{MeanCi, Paired, Verdict};
+use crate::fresh::{self as claimed, Comparison, negated};
+use crate::stats::{MeanCi, Verdict};
 use crate::{BAR_WIDTH, Chart, Claim, Env, Figure, Series, Style, Table, fmt_num};
 
 /// The paper's average error of audio+video, m (Kushwaha et al. 2008, Figs. 10–11: ≈ 2 m).
@@ -198,30 +198,10 @@ fn fresh_run(
     })
 }
 
-/// One claimed comparison on the fresh runs: "ours ≥ theirs" per unit (pass or run), margin 0.
-struct Comparison {
-    /// The key of its recorded verdict.
-    key: String,
-    /// What is claimed.
-    statement: String,
-    /// The units compared ("passes" or "multi-vehicle runs").
-    units: &'static str,
-    /// Per unit: ours, theirs (higher is better).
-    ours: Vec<f64>,
-    theirs: Vec<f64>,
-}
-
-impl Comparison {
-    fn paired(&self) -> Paired {
-        Paired::of(&self.ours, &self.theirs)
-    }
-}
-
 /// Every comparison, in report order: fusion against each modality alone (pass errors and
 /// multi-vehicle MOTA, each rule), audio+video against the paper's 2 m, the one configuration
 /// against the count-aware reference (each approach), and the calibration sweep.
 fn comparisons(f: &Fresh) -> Vec<Comparison> {
-    let neg = |v: Vec<f64>| v.into_iter().map(|x| -x).collect::<Vec<_>>();
     let mut out = Vec::new();
     for product in [false, true] {
         let rule = if product { "product" } else { "sum" };
@@ -237,8 +217,8 @@ fn comparisons(f: &Fresh) -> Vec<Comparison> {
                 key: format!("error_{rule}_av_vs_{who}"),
                 statement: format!("{rule} rule: audio+video's pass error ≤ {who} alone's"),
                 units: "passes",
-                ours: neg(f.pass_errors(both, Config::One)),
-                theirs: neg(f.pass_errors(alone, Config::One)),
+                ours: negated(&f.pass_errors(both, Config::One)),
+                theirs: negated(&f.pass_errors(alone, Config::One)),
             });
             out.push(Comparison {
                 key: format!("mota_{rule}_av_vs_{who}"),
@@ -254,7 +234,7 @@ fn comparisons(f: &Fresh) -> Vec<Comparison> {
             statement: format!("{rule} rule: audio+video's pass error ≤ the paper's ≈ 2 m"),
             units: "passes",
             theirs: vec![-PAPER_ERROR_M; errors.len()],
-            ours: neg(errors),
+            ours: negated(&errors),
         });
     }
     for a in Approach::ALL {
@@ -263,8 +243,8 @@ fn comparisons(f: &Fresh) -> Vec<Comparison> {
             key: format!("error_one_vs_count_aware_{key}"),
             statement: format!("{a}: the one configuration's pass error ≤ the count-aware one's"),
             units: "passes",
-            ours: neg(f.pass_errors(a, Config::One)),
-            theirs: neg(f.pass_errors(a, Config::CountAware)),
+            ours: negated(&f.pass_errors(a, Config::One)),
+            theirs: negated(&f.pass_errors(a, Config::CountAware)),
         });
         out.push(Comparison {
             key: format!("mota_one_vs_count_aware_{key}"),
@@ -300,34 +280,14 @@ pub(super) fn check_verdicts(verdicts: &BTreeMap<String, Verdict>) -> Result<()>
         sweep_deg: [0.0, 1.0],
         verdicts: BTreeMap::new(),
     };
-    let keys: Vec<String> = comparisons(&empty).into_iter().map(|c| c.key).collect();
-    if let Some(k) = verdicts.keys().find(|k| !keys.contains(k)) {
-        bail!("fresh_verdicts names {k:?}, which is no comparison");
-    }
-    Ok(())
+    claimed::check_verdicts(&comparisons(&empty), verdicts)
 }
 
 /// The claims: each comparison's verdict on the fresh runs is the recorded one (a missing
 /// record fails).
 pub(super) fn claims(f: &Fresh) -> Vec<Claim> {
-    comparisons(f)
-        .iter()
-        .map(|c| {
-            let fresh = format!(
-                "the {} fresh {} (seeds {})",
-                c.ours.len(),
-                c.units,
-                seed_range(&f.seeds)
-            );
-            verdict_claim(
-                &c.statement,
-                &fresh,
-                &c.paired(),
-                0.0,
-                f.verdicts.get(&c.key).copied(),
-            )
-        })
-        .collect()
+    let seeds = format!("seeds {}", seed_range(&f.seeds));
+    claimed::claims(&comparisons(f), &f.verdicts, &seeds)
 }
 
 /// "1901–1908", or the seeds listed when they are not consecutive.
@@ -359,16 +319,7 @@ pub(super) fn metrics(f: &Fresh, m: &mut crate::Metrics, key_of: fn(Approach) ->
             m.insert(format!("fresh_multi_mota_{key}{suffix}_ci95"), mota.ci);
         }
     }
-    for c in comparisons(f) {
-        let p = c.paired();
-        m.insert(format!("fresh_{}_diff", c.key), p.mean);
-        m.insert(format!("fresh_{}_low", c.key), p.low);
-        m.insert(format!("fresh_{}_high", c.key), p.high);
-    }
-    let [h, u, l] = tally(f);
-    m.insert("fresh_holds".into(), h as f64);
-    m.insert("fresh_undecided".into(), u as f64);
-    m.insert("fresh_loses".into(), l as f64);
+    claimed::metrics(&comparisons(f), m);
 }
 
 /// Per approach: the mean pass error and multi-vehicle MOTA (± 95 % CI) under the one
@@ -404,36 +355,17 @@ pub(super) fn means_table(f: &Fresh) -> Table {
 
 /// Every comparison: its paired difference and interval, the verdict and the recorded one.
 pub(super) fn comparisons_table(f: &Fresh) -> Table {
-    let mut t = Table::new(
+    claimed::table(
         "Fresh seeds: each comparison per pass or multi-vehicle run (ours − theirs, errors \
-         negated so that higher is better), mean [95 % paired t interval]; holds when the \
-         interval lies above 0, loses when below, else undecided",
-        &["comparison", "units", "difference", "verdict", "recorded"],
-    );
-    for c in comparisons(f) {
-        let p = c.paired();
-        t.row(vec![
-            c.statement.clone(),
-            format!("{} {}", c.ours.len(), c.units),
-            p.show(),
-            Verdict::of(&p, 0.0).name().into(),
-            f.verdicts.get(&c.key).map_or("—", |v| v.name()).into(),
-        ]);
-    }
-    t
+         negated so that higher is better)",
+        &comparisons(f),
+        &f.verdicts,
+    )
 }
 
 /// The verdicts' tally: (holds, undecided, loses).
 pub(super) fn tally(f: &Fresh) -> [usize; 3] {
-    let mut n = [0; 3];
-    for c in comparisons(f) {
-        n[match Verdict::of(&c.paired(), 0.0) {
-            Verdict::Holds => 0,
-            Verdict::Undecided => 1,
-            Verdict::Loses => 2,
-        }] += 1;
-    }
-    n
+    claimed::tally(&comparisons(f))
 }
 
 /// The comparisons of the one configuration against the count-aware reference that lose.
@@ -441,7 +373,7 @@ pub(super) fn losses_to_count_aware(f: &Fresh) -> Vec<String> {
     comparisons(f)
         .iter()
         .filter(|c| c.key.contains("count_aware"))
-        .filter(|c| Verdict::of(&c.paired(), 0.0) == Verdict::Loses)
+        .filter(|c| c.verdict() == Verdict::Loses)
         .map(|c| format!("{} ({})", c.statement, c.paired().show()))
         .collect()
 }

@@ -8,10 +8,11 @@ use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use tracker_model::SimulationConfig;
 
-use super::fresh::{self, FreshGroup};
+use super::fresh::comparisons;
 use super::{
     RunScores, Seeds, Stat, Trackers, Tuned, Tuning, Variant, paired, pm, run_grid, ties_and_losses,
 };
+use crate::fresh::{self, Comparison};
 use crate::stats::Verdict;
 use crate::{
     Chart, Claim, Env, Figure, Headline, Metrics, Pipeline, Section, Series, Style, Table, fmt_num,
@@ -87,32 +88,33 @@ pub struct Output {
     tuning: Tuning,
     variants: Vec<Variant>,
     groups: Vec<KSummary>,
-    /// The fresh scenarios per K and variant, with the seed and the recorded verdicts.
-    fresh: Vec<FreshGroup>,
+    /// The fresh scenarios' comparisons per K and variant, with the seed and the recorded
+    /// verdicts.
+    fresh: Vec<Comparison>,
     fresh_seed: u64,
     fresh_verdicts: BTreeMap<String, Verdict>,
 }
 
-/// The fresh runs of every K (`runs` each, K by K) under every variant.
-fn fresh_groups(
+/// The comparisons of the fresh runs of every K (`runs` each, K by K) under every variant.
+fn fresh_comparisons(
     targets: &[u32],
     results: &[RunScores],
     runs: usize,
     variants: &[Variant],
-) -> Vec<FreshGroup> {
-    let mut groups = Vec::new();
+) -> Vec<Comparison> {
+    let mut out = Vec::new();
     for (i, &k) in targets.iter().enumerate() {
         let group = &results[i * runs..(i + 1) * runs];
         for (v, variant) in variants.iter().enumerate() {
-            groups.push(FreshGroup::of(
-                format!("K = {k}, {}", variant.label()),
-                format!("k{k}{}", variant_key(*variant)),
+            out.extend(comparisons(
+                &format!("K = {k}, {}", variant.label()),
+                &format!("k{k}{}", variant_key(*variant)),
                 group,
                 v,
             ));
         }
     }
-    groups
+    out
 }
 
 /// A variant's part of verdict keys: `_truth`, or the variant's metric suffix.
@@ -198,9 +200,8 @@ impl Pipeline for Batch {
                 )
             })
             .collect();
-        let fresh = fresh_groups(&p.targets, &fresh_results, p.runs, &variants);
-        let keys: Vec<String> = fresh.iter().map(|g| g.key.clone()).collect();
-        fresh::check_verdicts(&keys, &p.fresh_verdicts)?;
+        let fresh = fresh_comparisons(&p.targets, &fresh_results, p.runs, &variants);
+        fresh::check_verdicts(&fresh, &p.fresh_verdicts)?;
         Ok(Output {
             runs: p.runs,
             simulation: p.simulation.clone(),
@@ -320,7 +321,15 @@ impl Pipeline for Batch {
                 fresh::tally_text(&out.fresh),
             ),
             tables: vec![
-                fresh::table(&out.fresh, &out.fresh_verdicts, out.fresh_seed),
+                fresh::table(
+                    &format!(
+                        "Fresh scenarios (seed {}; never used to choose anything): MCMCDA − tuned \
+                         GNN per scenario (GOSPA negated so that higher is better)",
+                        out.fresh_seed
+                    ),
+                    &out.fresh,
+                    &out.fresh_verdicts,
+                ),
                 summary_table(out),
                 misspecified_table(out),
                 tuned_table(out),
@@ -383,7 +392,11 @@ fn verdict(out: &Output) -> String {
 /// The claims: each fresh comparison's verdict is the recorded one (the reported scenarios'
 /// orderings are shown in the summary, not claimed).
 fn claims(out: &Output) -> Vec<Claim> {
-    fresh::claims(&out.fresh, &out.fresh_verdicts, out.fresh_seed)
+    fresh::claims(
+        &out.fresh,
+        &out.fresh_verdicts,
+        &format!("seed {}", out.fresh_seed),
+    )
 }
 
 /// F1, GOSPA, MAP − truth and time per K, with the true model.

@@ -7,8 +7,9 @@ use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use tracker_model::SimulationConfig;
 
-use super::fresh::{self, FreshGroup};
+use super::fresh::comparisons;
 use super::{Seeds, Stat, Trackers, Tuned, Tuning, Variant, paired, pm, run_grid, ties_and_losses};
+use crate::fresh::{self, Comparison};
 use crate::stats::Verdict;
 use crate::{Chart, Claim, Env, Figure, Metrics, Pipeline, Section, Series, Style, Table, fmt_num};
 
@@ -74,8 +75,8 @@ pub struct Output {
     clutter_per_scan: f64,
     tuning: Tuning,
     points: Vec<Point>,
-    /// The fresh scenarios per point, with the seed and the recorded verdicts.
-    fresh: Vec<FreshGroup>,
+    /// The fresh scenarios' comparisons per point, with the seed and the recorded verdicts.
+    fresh: Vec<Comparison>,
     fresh_seed: u64,
     fresh_verdicts: BTreeMap<String, Verdict>,
 }
@@ -139,21 +140,20 @@ impl Pipeline for Sweep {
                 }
             })
             .collect::<Vec<Point>>();
-        let fresh: Vec<FreshGroup> = points
+        let fresh: Vec<Comparison> = points
             .iter()
             .enumerate()
-            .map(|(i, pt)| {
+            .flat_map(|(i, pt)| {
                 let (name, key) = pt.names();
-                FreshGroup::of(
-                    format!("{name} = {}", pt.x),
-                    format!("{key}_{}", pt.x),
+                comparisons(
+                    &format!("{name} = {}", pt.x),
+                    &format!("{key}_{}", pt.x),
                     &fresh_results[i * p.runs..(i + 1) * p.runs],
                     0,
                 )
             })
             .collect();
-        let keys: Vec<String> = fresh.iter().map(|g| g.key.clone()).collect();
-        fresh::check_verdicts(&keys, &p.fresh_verdicts)?;
+        fresh::check_verdicts(&fresh, &p.fresh_verdicts)?;
         Ok(Output {
             targets: p.targets,
             runs: p.runs,
@@ -260,7 +260,15 @@ impl Pipeline for Sweep {
             ),
             tables: vec![
                 table,
-                fresh::table(&out.fresh, &out.fresh_verdicts, out.fresh_seed),
+                fresh::table(
+                    &format!(
+                        "Fresh scenarios (seed {}; never used to choose anything): MCMCDA − tuned \
+                         GNN per scenario (GOSPA negated so that higher is better)",
+                        out.fresh_seed
+                    ),
+                    &out.fresh,
+                    &out.fresh_verdicts,
+                ),
             ],
             figures: figures(out),
         }
@@ -302,7 +310,11 @@ fn verdict(out: &Output) -> String {
 /// The claims: each fresh comparison's verdict is the recorded one (the reported scenarios'
 /// orderings are shown in the summary, not claimed).
 fn claims(out: &Output) -> Vec<Claim> {
-    fresh::claims(&out.fresh, &out.fresh_verdicts, out.fresh_seed)
+    fresh::claims(
+        &out.fresh,
+        &out.fresh_verdicts,
+        &format!("seed {}", out.fresh_seed),
+    )
 }
 
 /// F1 of both trackers against p_d and against the clutter rate.
