@@ -213,20 +213,13 @@ fn comparisons(f: &Fresh) -> Vec<Comparison> {
             } else {
                 "video"
             };
-            out.push(Comparison {
-                key: format!("error_{rule}_av_vs_{who}"),
-                statement: format!("{rule} rule: audio+video's pass error ≤ {who} alone's"),
-                units: "passes",
-                ours: negated(&f.pass_errors(both, Config::One)),
-                theirs: negated(&f.pass_errors(alone, Config::One)),
-            });
-            out.push(Comparison {
-                key: format!("mota_{rule}_av_vs_{who}"),
-                statement: format!("{rule} rule: audio+video's multi-vehicle MOTA ≥ {who} alone's"),
-                units: "multi-vehicle runs",
-                ours: f.multi_motas(both, Config::One),
-                theirs: f.multi_motas(alone, Config::One),
-            });
+            out.extend(error_and_mota(
+                f,
+                &format!("{rule}_av_vs_{who}"),
+                &format!("{rule} rule"),
+                ["audio+video", &format!("{who} alone")],
+                [(both, Config::One), (alone, Config::One)],
+            ));
         }
         let errors = f.pass_errors(both, Config::One);
         out.push(Comparison {
@@ -239,22 +232,13 @@ fn comparisons(f: &Fresh) -> Vec<Comparison> {
     }
     for a in Approach::ALL {
         let key = a.settings_key();
-        out.push(Comparison {
-            key: format!("error_one_vs_count_aware_{key}"),
-            statement: format!("{a}: the one configuration's pass error ≤ the count-aware one's"),
-            units: "passes",
-            ours: negated(&f.pass_errors(a, Config::One)),
-            theirs: negated(&f.pass_errors(a, Config::CountAware)),
-        });
-        out.push(Comparison {
-            key: format!("mota_one_vs_count_aware_{key}"),
-            statement: format!(
-                "{a}: the one configuration's multi-vehicle MOTA ≥ the count-aware one's"
-            ),
-            units: "multi-vehicle runs",
-            ours: f.multi_motas(a, Config::One),
-            theirs: f.multi_motas(a, Config::CountAware),
-        });
+        out.extend(error_and_mota(
+            f,
+            &format!("one_vs_count_aware_{key}"),
+            &a.to_string(),
+            ["the one configuration", "the count-aware one"],
+            [(a, Config::One), (a, Config::CountAware)],
+        ));
     }
     for (m, who) in [(0, "audio"), (1, "video")] {
         out.push(Comparison {
@@ -270,6 +254,36 @@ fn comparisons(f: &Fresh) -> Vec<Comparison> {
         });
     }
     out
+}
+
+/// Ours against theirs (each an approach under a configuration) on the pass errors and on the
+/// multi-vehicle MOTA: keys `error_<key>` and `mota_<key>`, stated for `label` with the two
+/// sides' `names`.
+fn error_and_mota(
+    f: &Fresh,
+    key: &str,
+    label: &str,
+    names: [&str; 2],
+    sides: [(Approach, Config); 2],
+) -> [Comparison; 2] {
+    let [(ours, ours_config), (theirs, theirs_config)] = sides;
+    let [ours_name, theirs_name] = names;
+    [
+        Comparison {
+            key: format!("error_{key}"),
+            statement: format!("{label}: {ours_name}'s pass error ≤ {theirs_name}'s"),
+            units: "passes",
+            ours: negated(&f.pass_errors(ours, ours_config)),
+            theirs: negated(&f.pass_errors(theirs, theirs_config)),
+        },
+        Comparison {
+            key: format!("mota_{key}"),
+            statement: format!("{label}: {ours_name}'s multi-vehicle MOTA ≥ {theirs_name}'s"),
+            units: "multi-vehicle runs",
+            ours: f.multi_motas(ours, ours_config),
+            theirs: f.multi_motas(theirs, theirs_config),
+        },
+    ]
 }
 
 /// Every recorded verdict names a comparison (a comparison without one fails its claim).

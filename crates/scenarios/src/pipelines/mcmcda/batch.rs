@@ -321,15 +321,7 @@ impl Pipeline for Batch {
                 fresh::tally_text(&out.fresh),
             ),
             tables: vec![
-                fresh::table(
-                    &format!(
-                        "Fresh scenarios (seed {}; never used to choose anything): MCMCDA − tuned \
-                         GNN per scenario (GOSPA negated so that higher is better)",
-                        out.fresh_seed
-                    ),
-                    &out.fresh,
-                    &out.fresh_verdicts,
-                ),
+                super::fresh::table(&out.fresh, &out.fresh_verdicts, out.fresh_seed),
                 summary_table(out),
                 misspecified_table(out),
                 tuned_table(out),

@@ -4,8 +4,12 @@
 //! variant), MCMCDA against the tuned GNN by a paired 95 % t interval of F1 and of GOSPA
 //! ([`crate::fresh`]).
 
+use std::collections::BTreeMap;
+
 use super::{RunScores, Scores};
-use crate::fresh::{Comparison, negated};
+use crate::Table;
+use crate::fresh::{self, Comparison, negated};
+use crate::stats::Verdict;
 
 /// Variant `v` of one setting's fresh runs `group`: MCMCDA's F1 and GOSPA against the tuned
 /// GNN's, keyed `<key>_f1` and `<key>_gospa` and stated for `label` ("K = 10, true model").
@@ -37,4 +41,20 @@ pub(crate) fn comparisons(
             theirs: negated(&pick(|s| s.gospa, false)),
         },
     ]
+}
+
+/// The fresh comparisons' table of an experiment whose fresh scenarios come from `seed`.
+pub(crate) fn table(
+    comparisons: &[Comparison],
+    verdicts: &BTreeMap<String, Verdict>,
+    seed: u64,
+) -> Table {
+    fresh::table(
+        &format!(
+            "Fresh scenarios (seed {seed}; never used to choose anything): MCMCDA − tuned GNN \
+             per scenario (GOSPA negated so that higher is better)"
+        ),
+        comparisons,
+        verdicts,
+    )
 }

@@ -260,15 +260,7 @@ impl Pipeline for Sweep {
             ),
             tables: vec![
                 table,
-                fresh::table(
-                    &format!(
-                        "Fresh scenarios (seed {}; never used to choose anything): MCMCDA − tuned \
-                         GNN per scenario (GOSPA negated so that higher is better)",
-                        out.fresh_seed
-                    ),
-                    &out.fresh,
-                    &out.fresh_verdicts,
-                ),
+                super::fresh::table(&out.fresh, &out.fresh_verdicts, out.fresh_seed),
             ],
             figures: figures(out),
         }
