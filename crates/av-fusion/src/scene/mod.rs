@@ -12,8 +12,8 @@
 //!   sources, ground reflection, diffuse background noise) and through the sensors-video
 //!   renderer and background mixture (cameras at an angle to the road, swaying foliage,
 //!   glint, sensor noise), with the truth at every tick ([`Simulated`]);
-//! * [`score_with`] / [`score`]: one approach tracked on one simulated run, its mean error
-//!   per vehicle, MOTA and mean OSPA ([`Score`]).
+//! * [`score_with`] / [`score_count_aware`]: one approach tracked on one simulated run, its
+//!   mean error per vehicle, MOTA and mean OSPA ([`Score`]).
 //!
 //! The sensors never read the truth to decide what to report; every random draw comes from
 //! the generator passed in.

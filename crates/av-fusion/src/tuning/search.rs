@@ -128,7 +128,7 @@ pub fn objective(
 }
 
 /// The one configuration: for each approach on its own, [`Tuning`]'s search on every run of
-/// the seeds of `seeded` ([`tune_approach`]); each line goes to `log` as it is measured.
+/// the seeds of `seeded`; each line goes to `log` as it is measured.
 /// Returns each approach's choice and every scored candidate.
 pub fn tune_one_config(
     p: &Params,
