@@ -107,12 +107,6 @@ pub enum Error {
         /// What is wrong with the table.
         source: Box<Error>,
     },
-    /// A search stage has no candidates.
-    #[error("an empty {stage} grid")]
-    EmptyGrid {
-        /// The stage.
-        stage: &'static str,
-    },
 }
 
 /// Result with [`Error`].

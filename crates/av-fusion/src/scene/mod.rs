@@ -449,6 +449,7 @@ pub fn run_specs(p: &Params) -> Result<Vec<RunSpec>> {
 pub fn check_params(p: &Params, seed: u64) -> Result<()> {
     check_sizes(p)?;
     check_seeds(p, seed)?;
+    p.tuning.check()?;
     check_multi_beamform(&p.audio)?;
     for (k, table) in &p.multi_peak_scores {
         if Approach::from_settings_key(k).is_none() {

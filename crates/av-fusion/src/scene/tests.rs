@@ -118,6 +118,18 @@ fn bad_score_settings_and_reused_seeds_are_rejected_before_any_run() {
         err.contains("the reported seed and fresh_seeds share"),
         "{err}"
     );
+    // A search without rounds or with unbounded ones, or a non-finite error weight.
+    for rounds in [0, 1000] {
+        let mut p = good.clone();
+        p.tuning.max_rounds = rounds;
+        assert!(rejected(&p, 1801).contains("max_rounds"), "{rounds}");
+    }
+    let mut p = good.clone();
+    p.tuning.error_weight_per_m = f64::NAN;
+    assert!(rejected(&p, 1801).contains("error_weight_per_m"));
+    let mut p = good.clone();
+    p.tuning.p_detect = vec![0.5; 65];
+    assert!(rejected(&p, 1801).contains("p_detect"));
     // No fresh seeds, or more than the bound.
     let mut p = good.clone();
     p.fresh_seeds.clear();

@@ -13,6 +13,7 @@ use rayon::prelude::*;
 use serde::Deserialize;
 use tracker_model::Vec2;
 
+use crate::error::invalid;
 use crate::scene::{Approach, Params, RunSpec, Simulated, simulate_run};
 use crate::{AvRun, Error, Result};
 
@@ -91,6 +92,76 @@ pub struct Tuning {
     pub fade_power: Vec<f64>,
     /// At most this many rounds.
     pub max_rounds: usize,
+}
+
+/// The most rounds of [`Tuning`]'s search, and the most candidates of one coordinate.
+pub const MAX_ROUNDS: usize = 20;
+/// See [`MAX_ROUNDS`].
+pub const MAX_CANDIDATES: usize = 64;
+
+impl Tuning {
+    /// Checks the search's shape: 1 to [`MAX_ROUNDS`] rounds, at most [`MAX_CANDIDATES`]
+    /// finite candidates per coordinate, and a finite, non-negative error weight. (A candidate
+    /// the scene rejects is an error when the search tries it.)
+    pub fn check(&self) -> Result<()> {
+        if !(1..=MAX_ROUNDS).contains(&self.max_rounds) {
+            return Err(invalid(
+                "max_rounds",
+                format!("{}: 1 to {MAX_ROUNDS}", self.max_rounds),
+            ));
+        }
+        if !(self.error_weight_per_m.is_finite() && self.error_weight_per_m >= 0.0) {
+            return Err(invalid(
+                "error_weight_per_m",
+                format!("{}: must be finite and ≥ 0", self.error_weight_per_m),
+            ));
+        }
+        let counts = [
+            ("max_peaks", self.max_peaks.len()),
+            ("max_gap", self.max_gap.len()),
+        ];
+        let floats: [(&'static str, &[f64]); 16] = [
+            ("lobe_power", &self.lobe_power),
+            ("lobe_fraction", &self.lobe_fraction),
+            ("audio_exponent", &self.audio_exponent),
+            ("video_exponent", &self.video_exponent),
+            ("video_weight", &self.video_weight),
+            ("relative_threshold_sum", &self.relative_threshold_sum),
+            (
+                "relative_threshold_product",
+                &self.relative_threshold_product,
+            ),
+            ("suppression_radius_m", &self.suppression_radius_m),
+            ("p_detect", &self.p_detect),
+            ("clutter_per_scan", &self.clutter_per_scan),
+            ("births_per_scan", &self.births_per_scan),
+            ("explain_away_deg", &self.explain_away_deg),
+            ("product_floor", &self.product_floor),
+            ("max_speed", &self.max_speed),
+            ("fade_full_weight_m", &self.fade_full_weight_m),
+            ("fade_power", &self.fade_power),
+        ];
+        for (name, values) in floats {
+            if values.len() > MAX_CANDIDATES || values.iter().any(|v| !v.is_finite()) {
+                return Err(invalid(
+                    name,
+                    format!(
+                        "{} candidates: at most {MAX_CANDIDATES}, all finite",
+                        values.len()
+                    ),
+                ));
+            }
+        }
+        for (name, n) in counts {
+            if n > MAX_CANDIDATES {
+                return Err(invalid(
+                    name,
+                    format!("{n} candidates: at most {MAX_CANDIDATES}"),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 /// How the peak-score tables of [`Params::multi_peak_scores`] are learnt

@@ -11,7 +11,7 @@ use crate::scene::{
 };
 use crate::{LobeEqualisation, Modalities, RangeFade, Result};
 
-/// One coordinate of the multi-vehicle search: its name and how a candidate value sets it.
+/// One coordinate of the search: its name, its candidates and how a candidate sets it.
 pub(super) type Coordinate = (&'static str, Vec<f64>, fn(&mut ApproachSettings, f64));
 
 /// The lobe equalisation with β or η replaced; β ≤ 0 turns it off, and one turned on from off
@@ -55,7 +55,7 @@ pub struct SearchRow {
     pub approach: Approach,
     /// Round (1-based; 0 for the two starting points).
     pub round: usize,
-    /// The coordinate (`start` for a starting point: `count-aware single` or `... multi`).
+    /// The coordinate (for a starting point: `count-aware single` or `count-aware multi`).
     pub coordinate: &'static str,
     /// The candidate value.
     pub value: f64,
