@@ -184,7 +184,9 @@ fn fresh_run(
                 audio_deg: deg,
                 video_deg: deg,
             };
-            Ok(with_one(a, calib)?.errors[0])
+            // A pass has one vehicle; without its track the error is the match distance.
+            let errors = with_one(a, calib)?.errors;
+            Ok(errors.first().copied().unwrap_or(scene.match_distance_m))
         };
         let ends =
             |a: Approach| -> Result<[f64; 2]> { Ok([at(a, sweep_deg[0])?, at(a, sweep_deg[1])?]) };
