@@ -116,7 +116,7 @@ impl Clock for NoClock {
 /// scenarios` reads each option from the environment variable of the same name and writes the
 /// text to the terminal; the crate itself touches neither.
 pub trait Developer: Sync {
-    /// The value of the developer option `name` (e.g. `AV_FUSION_TUNE`), if it is set.
+    /// The value of the developer option `name` (e.g. `AV_FUSION_DIAG`), if it is set.
     fn option(&self, name: &str) -> Option<String>;
     /// One line (or table) of a developer tool's output, shown as it is measured.
     fn say(&self, text: &str);
