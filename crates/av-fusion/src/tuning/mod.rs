@@ -116,52 +116,45 @@ impl Tuning {
                 format!("{}: must be finite and ≥ 0", self.error_weight_per_m),
             ));
         }
-        let counts = [
-            ("max_peaks", self.max_peaks.len()),
-            ("max_gap", self.max_gap.len()),
-        ];
-        let floats: [(&'static str, &[f64]); 16] = [
-            ("lobe_power", &self.lobe_power),
-            ("lobe_fraction", &self.lobe_fraction),
-            ("audio_exponent", &self.audio_exponent),
-            ("video_exponent", &self.video_exponent),
-            ("video_weight", &self.video_weight),
-            ("relative_threshold_sum", &self.relative_threshold_sum),
-            (
+        // (name, candidates, all finite) of every coordinate; integer lists are finite.
+        let lists: [(&'static str, usize, bool); 18] = [
+            ("max_peaks", self.max_peaks.len(), true),
+            ("max_gap", self.max_gap.len(), true),
+            finite("lobe_power", &self.lobe_power),
+            finite("lobe_fraction", &self.lobe_fraction),
+            finite("audio_exponent", &self.audio_exponent),
+            finite("video_exponent", &self.video_exponent),
+            finite("video_weight", &self.video_weight),
+            finite("relative_threshold_sum", &self.relative_threshold_sum),
+            finite(
                 "relative_threshold_product",
                 &self.relative_threshold_product,
             ),
-            ("suppression_radius_m", &self.suppression_radius_m),
-            ("p_detect", &self.p_detect),
-            ("clutter_per_scan", &self.clutter_per_scan),
-            ("births_per_scan", &self.births_per_scan),
-            ("explain_away_deg", &self.explain_away_deg),
-            ("product_floor", &self.product_floor),
-            ("max_speed", &self.max_speed),
-            ("fade_full_weight_m", &self.fade_full_weight_m),
-            ("fade_power", &self.fade_power),
+            finite("suppression_radius_m", &self.suppression_radius_m),
+            finite("p_detect", &self.p_detect),
+            finite("clutter_per_scan", &self.clutter_per_scan),
+            finite("births_per_scan", &self.births_per_scan),
+            finite("explain_away_deg", &self.explain_away_deg),
+            finite("product_floor", &self.product_floor),
+            finite("max_speed", &self.max_speed),
+            finite("fade_full_weight_m", &self.fade_full_weight_m),
+            finite("fade_power", &self.fade_power),
         ];
-        for (name, values) in floats {
-            if values.len() > MAX_CANDIDATES || values.iter().any(|v| !v.is_finite()) {
+        for (name, n, all_finite) in lists {
+            if n > MAX_CANDIDATES || !all_finite {
                 return Err(invalid(
                     name,
-                    format!(
-                        "{} candidates: at most {MAX_CANDIDATES}, all finite",
-                        values.len()
-                    ),
-                ));
-            }
-        }
-        for (name, n) in counts {
-            if n > MAX_CANDIDATES {
-                return Err(invalid(
-                    name,
-                    format!("{n} candidates: at most {MAX_CANDIDATES}"),
+                    format!("{n} candidates: at most {MAX_CANDIDATES}, all finite"),
                 ));
             }
         }
         Ok(())
     }
+}
+
+/// A float coordinate's (name, candidates, all finite) for [`Tuning::check`].
+fn finite(name: &'static str, values: &[f64]) -> (&'static str, usize, bool) {
+    (name, values.len(), values.iter().all(|v| v.is_finite()))
 }
 
 /// How the peak-score tables of [`Params::multi_peak_scores`] are learnt

@@ -81,26 +81,28 @@ pub struct Output {
     fresh_verdicts: BTreeMap<String, Verdict>,
 }
 
+/// The simulation at every point: the p_d sweep, then the clutter sweep.
+fn sweep_settings(p: &Params) -> Vec<(SimulationConfig, u32)> {
+    let at_pd = p.p_detect.iter().map(|&p_detect| SimulationConfig {
+        p_detect,
+        ..p.simulation.clone()
+    });
+    let at_clutter = p.clutter.iter().map(|&clutter_per_scan| SimulationConfig {
+        clutter_per_scan,
+        ..p.simulation.clone()
+    });
+    at_pd
+        .chain(at_clutter)
+        .map(|sim| (sim, p.targets))
+        .collect()
+}
+
 impl Pipeline for Sweep {
     type Params = Params;
     type Output = Output;
 
     fn compute(p: &Params, rng: &mut ChaCha8Rng, env: &Env<'_>) -> Result<Output> {
-        let mut settings: Vec<(SimulationConfig, u32)> = Vec::new();
-        for &p_detect in &p.p_detect {
-            let sim = SimulationConfig {
-                p_detect,
-                ..p.simulation.clone()
-            };
-            settings.push((sim, p.targets));
-        }
-        for &clutter_per_scan in &p.clutter {
-            let sim = SimulationConfig {
-                clutter_per_scan,
-                ..p.simulation.clone()
-            };
-            settings.push((sim, p.targets));
-        }
+        let settings = sweep_settings(p);
         let seeds = Seeds {
             reported: rng,
             fresh: p.fresh_seed,
