@@ -55,10 +55,14 @@ mod error;
 mod gaussian;
 mod geometry;
 mod grid;
+mod imm;
 mod kalman;
 pub mod matrix_rows;
 mod models;
 mod mot;
+mod motion;
+mod nonlinear;
+mod radar;
 mod simulate;
 mod track;
 mod tracking;
@@ -78,6 +82,7 @@ pub use gaussian::{
 };
 pub use geometry::{BoundingBox, Region, Region2, Vec2, bearing_rad, wrap_angle_rad};
 pub use grid::{LikelihoodGrid, Peak, PeakConfig};
+pub use imm::{Imm, ImmState, ImmUpdated, MAX_IMM_MODES, Mode};
 pub use kalman::{FilterRun, FilterStep, filter, rts_step, smooth};
 pub use models::{
     ConstantVelocity2, CvNoise, CvState, FullStateMeasurement, Innovation, LinearObservation,
@@ -85,6 +90,12 @@ pub use models::{
     axes_uncoupled, full_state_measurement, position_measurement,
 };
 pub use mot::{MotFile, MotRow, format_mot, parse_mot, read_mot};
+pub use motion::{
+    ConstantVelocity3, ConstantVelocityTurnLayout, CoordinatedTurn, CoordinatedTurnRate,
+    MAX_TURN_RATE_RAD_S, TurnNoise,
+};
+pub use nonlinear::{GaussianFilter, MAX_SIGMA_KAPPA, MeasurementModel, MotionModel, SigmaPoints};
+pub use radar::{RadarSite, RangeBearing, RangeBearingElevation};
 pub use simulate::{Simulation, SimulationConfig, Simulator};
 pub use track::{
     Frame, FrameClock, Location, Measurement, Origin, Scan, Track, TrackId, TrackPoint, TrackSet,

@@ -127,10 +127,10 @@ struct Projected<const N: usize, const M: usize> {
 }
 
 /// The innovation with what the update reuses: the factor of S and H P.
-struct Innovated<const N: usize, const M: usize> {
-    innovation: Innovation<M>,
-    chol: CholeskyFactor<M>,
-    hp: SMatrix<f64, M, N>,
+pub(crate) struct Innovated<const N: usize, const M: usize> {
+    pub(crate) innovation: Innovation<M>,
+    pub(crate) chol: CholeskyFactor<M>,
+    pub(crate) hp: SMatrix<f64, M, N>,
 }
 
 fn innovate<O, const N: usize, const M: usize>(
@@ -158,10 +158,20 @@ fn innovate_projected<const N: usize, const M: usize>(
 ) -> Result<Innovated<N, M>> {
     check_finite_matrix(z, "measurement")?;
     let Projected { hp, hpht, hx } = projected;
+    innovation_from_residual(hp, hpht, r, z - hx)
+}
+
+/// The innovation of a residual z − h(x⁻) already formed (wrapped, for angles) with H P⁻ and
+/// H P⁻ Hᵀ: S = H P⁻ Hᵀ + R, its factor, the Mahalanobis distance and log N(residual; 0, S).
+pub(crate) fn innovation_from_residual<const N: usize, const M: usize>(
+    hp: SMatrix<f64, M, N>,
+    hpht: SMatrix<f64, M, M>,
+    r: &SMatrix<f64, M, M>,
+    residual: SVector<f64, M>,
+) -> Result<Innovated<N, M>> {
     let s = symmetrise(&(hpht + r));
     // S is symmetric by construction; the factorisation itself rejects non-finite values.
     let chol = CholeskyFactor::new(&s, "innovation covariance")?;
-    let residual = z - hx;
     let mahalanobis_sq = chol.mahalanobis_sq(&residual);
     let innovation = Innovation {
         residual,
@@ -177,7 +187,7 @@ fn innovate_projected<const N: usize, const M: usize>(
 }
 
 /// The Joseph-form update from an innovation; `times_ht(A)` is A Hᵀ.
-fn joseph_update<const N: usize, const M: usize>(
+pub(crate) fn joseph_update<const N: usize, const M: usize>(
     innovated: Innovated<N, M>,
     predicted: &Gaussian<N>,
     r: &SMatrix<f64, M, M>,
@@ -443,7 +453,13 @@ impl TransitionModel<4> for ConstantVelocity2 {
     }
 
     fn process_noise(&self, steps: u32) -> SMatrix<f64, 4, 4> {
-        let dt = self.dt_s * f64::from(steps);
+        self.noise_over(self.dt_s * f64::from(steps))
+    }
+}
+
+impl ConstantVelocity2 {
+    /// Q(Δ) for an interval of `dt` seconds, in either noise form.
+    pub fn noise_over(&self, dt: f64) -> SMatrix<f64, 4, 4> {
         match self.noise {
             CvNoise::WhiteAcceleration { q } => {
                 let (a, b, c) = (q * dt.powi(3) / 3.0, q * dt.powi(2) / 2.0, q * dt);

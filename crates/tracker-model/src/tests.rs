@@ -9,6 +9,8 @@ use rand_distr::{Distribution, StandardNormal};
 
 use crate::*;
 
+mod nonlinear;
+
 fn rng(seed: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(seed)
 }
