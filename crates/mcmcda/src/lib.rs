@@ -22,6 +22,8 @@
 //! * baselines: [`nearest_neighbour_tracks`] (GNN with the log-likelihood-ratio costs of
 //!   [`AssignmentCost`], M-of-N confirmation and deletion after a gap, and the greedy
 //!   filter [`chain::greedy_initial_partition`] that starts the chain);
+//! * [`PlotGnn`]: GNN on radar plots in dwells with any `tracker_model::StateEstimator`
+//!   (Kalman, EKF, UKF, IMM) and any measurement model (range-bearing radars);
 //! * the one tracker interface of tracker-model: [`OnlineTracker`] and [`JpdaTracker`] are
 //!   `tracker_model::Tracker`s, [`BatchMcmcda`] and [`Gnn`] `tracker_model::BatchTracker`s;
 //! * [`smoothed_tracks`], [`measurement_labels`], [`tracks_by_origin`]: from partitions to
@@ -60,6 +62,7 @@ mod nearest;
 mod neighbours;
 mod online;
 mod partition;
+mod plots;
 mod problem;
 mod proposal;
 pub mod reference;
@@ -79,6 +82,7 @@ pub use nearest::{Assignment, AssignmentCost, NearestNeighbourConfig, nearest_ne
 pub use online::{
     CommittedPiece, MAX_WINDOW, OnlineConfig, OnlineResult, OnlineStep, OnlineTracker,
 };
+pub use plots::{Dwell, MAX_DWELL_PLOTS, MAX_PLOT_TRACKS, PlotGnn, PlotGnnConfig, PlotTrackState};
 pub use problem::{MeasId, Problem};
 pub use sampler::{McmcdaRun, MoveStats};
 

@@ -9,6 +9,8 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use tracker_model::{ConstantVelocity2, Measurement, Origin, Scan, SimulationConfig};
 
+mod plots;
+
 use crate::reference::{enumerate_partitions, log_posterior_by_counts};
 use crate::sampler::Chain;
 use crate::{

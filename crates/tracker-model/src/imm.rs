@@ -25,6 +25,8 @@ pub struct Imm<const N: usize> {
     /// π_ij = P(mode j at this scan | mode i at the last), row-major.
     switching: Vec<f64>,
     filter: GaussianFilter,
+    /// The mode probabilities a new target starts with (uniform unless set).
+    start_probabilities: Vec<f64>,
 }
 
 /// The IMM's belief: one Gaussian per mode and the mode probabilities (after a prediction,
@@ -130,10 +132,36 @@ impl<const N: usize> Imm<N> {
             check_probabilities(row, "switching matrix row")?;
         }
         Ok(Self {
+            start_probabilities: vec![1.0 / r as f64; r],
             modes,
             switching: switching.concat(),
             filter,
         })
+    }
+
+    /// The same IMM with the mode probabilities a new target starts with (see
+    /// [`StateEstimator::start`](crate::StateEstimator::start)).
+    pub fn with_start_probabilities(mut self, probabilities: &[f64]) -> Result<Self> {
+        if probabilities.len() != self.modes.len() {
+            return Err(Error::ShapeMismatch(format!(
+                "{} start probabilities for {} modes",
+                probabilities.len(),
+                self.modes.len()
+            )));
+        }
+        check_probabilities(probabilities, "start probabilities")?;
+        self.start_probabilities = probabilities.to_vec();
+        Ok(self)
+    }
+
+    /// The filter every mode runs.
+    pub fn filter(&self) -> GaussianFilter {
+        self.filter
+    }
+
+    /// The mode probabilities a new target starts with.
+    pub fn start_probabilities(&self) -> &[f64] {
+        &self.start_probabilities
     }
 
     /// The number of modes.

@@ -52,6 +52,7 @@ mod bearing;
 mod consistency;
 mod detector;
 mod error;
+mod estimator;
 mod gaussian;
 mod geometry;
 mod grid;
@@ -76,6 +77,7 @@ pub use detector::{LocalDetector, LocalDetectorFactory};
 pub use error::{
     Error, Result, ensure_in_range, ensure_non_negative, ensure_open_probability, ensure_positive,
 };
+pub use estimator::{Scored, SingleModel, StateEstimator};
 pub use gaussian::{
     CholeskyFactor, Gaussian, LN_2PI, check_finite_matrix, check_positive_semidefinite,
     check_symmetric, cholesky_checked,
@@ -94,7 +96,10 @@ pub use motion::{
     ConstantVelocity3, ConstantVelocityTurnLayout, CoordinatedTurn, CoordinatedTurnRate,
     MAX_TURN_RATE_RAD_S, TurnNoise,
 };
-pub use nonlinear::{GaussianFilter, MAX_SIGMA_KAPPA, MeasurementModel, MotionModel, SigmaPoints};
+pub use nonlinear::{
+    GaussianFilter, MAX_SIGMA_KAPPA, MeasurementModel, MeasurementPrediction, MotionModel,
+    SigmaPoints,
+};
 pub use radar::{RadarSite, RangeBearing, RangeBearingElevation};
 pub use simulate::{Simulation, SimulationConfig, Simulator};
 pub use track::{

@@ -227,6 +227,74 @@ impl GaussianFilter {
     }
 }
 
+/// The predicted measurement N(ẑ, S) of a state, for gating: a measurement's distance to it
+/// uses the model's residual, so angles are compared the short way round.
+#[derive(Debug, Clone)]
+pub struct MeasurementPrediction<const M: usize> {
+    mean: SVector<f64, M>,
+    chol: CholeskyFactor<M>,
+}
+
+impl<const M: usize> MeasurementPrediction<M> {
+    /// ẑ.
+    pub fn mean(&self) -> &SVector<f64, M> {
+        &self.mean
+    }
+
+    /// (z − ẑ)ᵀ S⁻¹ (z − ẑ), the residual formed by `sensor`.
+    pub fn mahalanobis_sq<O, const N: usize>(&self, sensor: &O, z: &SVector<f64, M>) -> f64
+    where
+        O: MeasurementModel<N, M> + ?Sized,
+    {
+        self.chol.mahalanobis_sq(&sensor.residual(z, &self.mean))
+    }
+}
+
+impl GaussianFilter {
+    /// N(ẑ, S) for `predicted` seen by `sensor`: linearised (EKF) or by the unscented
+    /// transform (UKF), as this filter's update forms it.
+    pub fn predict_measurement<O, const N: usize, const M: usize>(
+        &self,
+        sensor: &O,
+        predicted: &Gaussian<N>,
+    ) -> Result<MeasurementPrediction<M>>
+    where
+        O: MeasurementModel<N, M> + ?Sized,
+    {
+        let (mean, spread) = match self {
+            GaussianFilter::Extended => {
+                let x = predicted.mean();
+                let h = sensor.jacobian(x);
+                check_finite_matrix(&h, "measurement Jacobian")?;
+                (
+                    sensor.measure(x),
+                    h * predicted.covariance() * h.transpose(),
+                )
+            }
+            GaussianFilter::Unscented(sigma) => {
+                let set = sigma.draw(predicted)?;
+                let zs: Vec<SVector<f64, M>> =
+                    set.points.iter().map(|p| sensor.measure(p)).collect();
+                let zhat = sensor.weighted_mean(&zs, &set.wm);
+                let spread = zs
+                    .iter()
+                    .zip(&set.wc)
+                    .fold(SMatrix::zeros(), |acc, (zi, w)| {
+                        let d = sensor.residual(zi, &zhat);
+                        acc + d * d.transpose() * *w
+                    });
+                (zhat, spread)
+            }
+        };
+        check_finite_matrix(&mean, "predicted measurement")?;
+        let s = symmetrise(&(spread + sensor.noise()));
+        Ok(MeasurementPrediction {
+            mean,
+            chol: CholeskyFactor::new(&s, "innovation covariance")?,
+        })
+    }
+}
+
 /// The EKF update: H = ∂h/∂x at x⁻, residual z − h(x⁻) (wrapped by the model), Joseph form.
 fn extended_update<O, const N: usize, const M: usize>(
     sensor: &O,

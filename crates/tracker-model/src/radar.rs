@@ -106,6 +106,15 @@ impl<const N: usize> RangeBearing<N> {
     pub fn site(&self) -> &RadarSite<2> {
         &self.site
     }
+
+    /// The plot z = [r, θ] as a position, with the covariance J R Jᵀ of the linearised
+    /// conversion (J = ∂(x, y)/∂(r, θ)): how a track is started from one plot.
+    pub fn position_of(&self, z: &SVector<f64, 2>) -> (SVector<f64, 2>, SMatrix<f64, 2, 2>) {
+        let (sin, cos) = z[1].sin_cos();
+        let p = self.site.position + SVector::<f64, 2>::new(cos, sin) * z[0];
+        let j = SMatrix::<f64, 2, 2>::new(cos, -z[0] * sin, sin, z[0] * cos);
+        (p, j * MeasurementModel::<N, 2>::noise(self) * j.transpose())
+    }
 }
 
 impl<const N: usize> MeasurementModel<N, 2> for RangeBearing<N> {
