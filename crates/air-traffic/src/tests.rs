@@ -1,0 +1,303 @@
+//! Tests of air-traffic against closed forms, hand-written collections and seeded statistics.
+
+use approx::assert_relative_eq;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use crate::*;
+
+const A: f64 = 6_378_137.0;
+const F: f64 = 1.0 / 298.257_223_563;
+
+/// Small offsets move along the ellipsoid's meridian and prime-vertical radii:
+/// M = a(1 − e²)/(1 − e² sin²φ)^{3/2}, N = a/(1 − e² sin²φ)^{1/2}.
+#[test]
+fn enu_offsets_follow_the_radii_of_curvature() {
+    let frame = EnuFrame::new(48.5, 2.5).unwrap();
+    let origin = frame.to_enu(48.5, 2.5, 0.0).unwrap();
+    assert!(origin.iter().all(|v| v.abs() < 1e-6), "{origin:?}");
+    let e2 = F * (2.0 - F);
+    let s2 = 48.5f64.to_radians().sin().powi(2);
+    let m = A * (1.0 - e2) / (1.0 - e2 * s2).powf(1.5);
+    let n = A / (1.0 - e2 * s2).sqrt();
+    let d = 1e-3f64; // degrees: ~100 m, where the curvature's own error is below a millimetre
+    let north = frame.to_enu(48.5 + d, 2.5, 0.0).unwrap();
+    assert_relative_eq!(north[1], m * d.to_radians(), max_relative = 1e-5);
+    assert!(north[0].abs() < 1e-6);
+    let east = frame.to_enu(48.5, 2.5 + d, 0.0).unwrap();
+    assert_relative_eq!(
+        east[0],
+        n * 48.5f64.to_radians().cos() * d.to_radians(),
+        max_relative = 1e-5
+    );
+    let up = frame.to_enu(48.5, 2.5, 1000.0).unwrap();
+    assert_relative_eq!(up[2], 1000.0, epsilon = 1e-6);
+    // 100 km north the surface has dropped by about d²/(2R).
+    let far = frame.to_enu(48.5 + 0.9, 2.5, 0.0).unwrap();
+    let drop = far[1].powi(2) / (2.0 * (m * n).sqrt());
+    assert_relative_eq!(-far[2], drop, max_relative = 0.01);
+}
+
+const COLLECTION: &str = r#"[
+ {"icao24":"abc123","timestamp":1000000,"latitude":48.5,"longitude":2.5,"groundspeed":100.0,"track":90.0,"onground":false,"altitude":1000.0},
+ {"icao24":"abc123","timestamp":1001000,"latitude":48.5,"longitude":2.5007,"groundspeed":100.0,"track":90.0,"onground":false,"altitude":null},
+ {"icao24":"abc123","timestamp":1001000,"latitude":48.6,"longitude":2.6,"groundspeed":1.0,"track":0.0,"onground":false},
+ {"icao24":"abc123","timestamp":1002000,"latitude":48.5,"longitude":2.5014,"groundspeed":null,"track":null,"onground":false},
+ {"icao24":"abc123","timestamp":1100000,"latitude":48.5,"longitude":2.6,"groundspeed":100.0,"track":90.0,"onground":false},
+ {"icao24":"abc123","timestamp":1101000,"latitude":48.5,"longitude":2.6007,"groundspeed":100.0,"track":90.0,"onground":false},
+ {"icao24":"def456","timestamp":1000500,"latitude":48.4,"longitude":2.4,"groundspeed":0.0,"track":0.0,"onground":true},
+ {"icao24":"def456","timestamp":1001500,"latitude":null,"longitude":null,"groundspeed":200.0,"track":0.0,"onground":false}
+]"#;
+
+fn read_config() -> ReadConfig {
+    ReadConfig {
+        frame: EnuFrame::new(48.5, 2.5).unwrap(),
+        max_gap_s: 20.0,
+        min_duration_s: 0.0,
+    }
+}
+
+/// The gap of 98 s splits abc123 in two; the repeated time stamp keeps its first report; the
+/// report on the ground and the one without a position are dropped, so def456 is gone.
+#[test]
+fn a_hand_written_collection_becomes_its_trajectories() {
+    let trajectories = read_collection(COLLECTION, &read_config()).unwrap();
+    assert_eq!(trajectories.len(), 2);
+    assert!(trajectories.iter().all(|t| t.label() == "abc123"));
+    let first = &trajectories[0];
+    assert_eq!(first.samples().len(), 3);
+    assert_eq!(first.span(), (0.0, 2.0));
+    // 100 kt due east (track 90° clockwise from north).
+    let v = first.samples()[0].velocity;
+    assert_relative_eq!(v[0], 100.0 * 1852.0 / 3600.0, epsilon = 1e-9);
+    assert!(v[1].abs() < 1e-9);
+    // The last sample has no ground speed: its velocity is the positions' difference.
+    let s = first.samples();
+    let dv = (s[2].position[0] - s[1].position[0]) / 1.0;
+    assert_relative_eq!(s[2].velocity[0], dv, epsilon = 1e-9);
+    assert_eq!(trajectories[1].span(), (100.0, 101.0));
+}
+
+#[test]
+fn bad_collections_are_errors() {
+    for bad in [
+        "",
+        "{}",
+        "[{\"icao24\": 3}]",
+        "[{\"icao24\":\"a\",\"timestamp\":\"x\"}]",
+    ] {
+        assert!(read_collection(bad, &read_config()).is_err(), "{bad}");
+    }
+    let config = ReadConfig {
+        max_gap_s: 0.0,
+        ..read_config()
+    };
+    assert!(read_collection(COLLECTION, &config).is_err());
+}
+
+/// A circle at 2°/s sampled every second: positions interpolate on the chords, and the turn
+/// rate reads 2°/s.
+#[test]
+fn a_sampled_circle_has_its_turn_rate() {
+    let (rate, speed) = (2f64.to_radians(), 200.0);
+    let r = speed / rate;
+    let samples: Vec<Sample> = (0..120)
+        .map(|k| {
+            let a = rate * k as f64;
+            Sample {
+                time_s: k as f64,
+                position: [r * a.sin(), r * (1.0 - a.cos())],
+                velocity: [speed * a.cos(), speed * a.sin()],
+            }
+        })
+        .collect();
+    let t = Trajectory::new("circle".into(), samples).unwrap();
+    assert_relative_eq!(
+        t.turn_rate_at(60.0, 5.0).unwrap(),
+        rate,
+        max_relative = 1e-9
+    );
+    let mid = t.at(10.5).unwrap();
+    let a = t.at(10.0).unwrap();
+    let b = t.at(11.0).unwrap();
+    assert_relative_eq!(
+        mid.position[0],
+        0.5 * (a.position[0] + b.position[0]),
+        epsilon = 1e-9
+    );
+    assert!(t.at(-1.0).is_none() && t.at(119.5).is_none());
+    assert!(t.turn_rate_at(2.0, 5.0).is_none());
+}
+
+fn standin() -> StandinConfig {
+    StandinConfig {
+        aircraft: 20,
+        duration_s: 1800.0,
+        half_width_m: 80_000.0,
+        speed_m_s: [150.0, 250.0],
+        leg_s: [60.0, 240.0],
+        turn_deg_s: [1.5, 3.0],
+        turn_change_deg: [30.0, 120.0],
+        life_s: [600.0, 1800.0],
+    }
+}
+
+#[test]
+fn the_standin_is_reproducible_and_keeps_its_limits() {
+    let a = standin()
+        .generate(&mut ChaCha8Rng::seed_from_u64(3))
+        .unwrap();
+    let b = standin()
+        .generate(&mut ChaCha8Rng::seed_from_u64(3))
+        .unwrap();
+    assert_eq!(a, b);
+    assert!(a.len() >= 15);
+    let mut turning = 0;
+    for t in &a {
+        for s in t.samples() {
+            assert!(s.position.iter().all(|c| c.abs() <= 80_000.0 * 1.0001));
+            let speed = s.velocity[0].hypot(s.velocity[1]);
+            assert!((150.0..=250.0).contains(&speed), "{speed}");
+        }
+        let (start, end) = t.span();
+        let mut time = start + 5.0;
+        while time < end - 5.0 {
+            let w = t.turn_rate_at(time, 0.5).unwrap().to_degrees().abs();
+            assert!(w < 3.0 + 1e-6, "{w} deg/s");
+            turning += usize::from(w > 1.0);
+            time += 10.0;
+        }
+    }
+    assert!(turning > 20, "only {turning} turning samples");
+}
+
+fn radar() -> RotatingRadar {
+    RotatingRadar {
+        position: [1000.0, -2000.0],
+        period_s: 10.0,
+        dwells: 12,
+        min_range_m: 1000.0,
+        max_range_m: 150_000.0,
+        sigma_range_m: 50.0,
+        sigma_bearing_rad: 0.002,
+        p_detect: 0.8,
+        clutter_per_revolution: 30.0,
+    }
+}
+
+#[test]
+fn views_wrap_at_the_bearing_cut() {
+    let r = radar();
+    let z = |range: f64, b: f64| nalgebra::SVector::<f64, 2>::new(range, b);
+    let pi = std::f64::consts::PI;
+    assert!(r.in_view(pi, &z(5000.0, -pi + 0.1)));
+    assert!(!r.in_view(pi, &z(5000.0, -pi + 0.3)));
+    assert!(!r.in_view(0.0, &z(500.0, 0.0)));
+    assert!(!r.in_view(0.0, &z(200_000.0, 0.0)));
+}
+
+/// Detections, clutter and noise have the rates and spreads asked for, within four standard
+/// errors over 2000 revolutions.
+#[test]
+fn simulated_plots_have_the_configured_statistics() {
+    let r = radar();
+    // A slow aircraft circling 40 km from the radar: every revolution sees it once.
+    let samples: Vec<Sample> = (0..20_001)
+        .map(|k| {
+            let a = 1e-4 * k as f64;
+            Sample {
+                time_s: k as f64,
+                position: [1000.0 + 40_000.0 * a.cos(), -2000.0 + 40_000.0 * a.sin()],
+                velocity: [-4.0 * a.sin(), 4.0 * a.cos()],
+            }
+        })
+        .collect();
+    let t = vec![Trajectory::new("slow".into(), samples).unwrap()];
+    let dwells = r
+        .simulate(&t, 0.0, 20_000.0, &mut ChaCha8Rng::seed_from_u64(5))
+        .unwrap();
+    let revolutions = 2000.0;
+    let hits: Vec<(f64, nalgebra::SVector<f64, 2>)> = dwells
+        .iter()
+        .flat_map(|d| {
+            d.plots
+                .iter()
+                .zip(&d.origins)
+                .filter(|(_, o)| o.is_some())
+                .map(|(z, _)| (d.time_s, *z))
+        })
+        .collect();
+    let p = hits.len() as f64 / revolutions;
+    assert!(
+        (p - 0.8).abs() < 4.0 * (0.8f64 * 0.2 / revolutions).sqrt(),
+        "p_d {p}"
+    );
+    let clutter: usize = dwells
+        .iter()
+        .map(|d| d.origins.iter().filter(|o| o.is_none()).count())
+        .sum();
+    let per_rev = clutter as f64 / revolutions;
+    assert!(
+        (per_rev - 30.0).abs() < 4.0 * (30.0f64 / revolutions).sqrt(),
+        "clutter {per_rev}"
+    );
+    let errors: Vec<f64> = hits
+        .iter()
+        .map(|(time, z)| {
+            let s = t[0].at(*time).unwrap();
+            z[0] - (s.position[0] - 1000.0).hypot(s.position[1] + 2000.0)
+        })
+        .collect();
+    let sd = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
+    assert!(
+        (sd - 50.0).abs() < 4.0 * 50.0 / (2.0 * errors.len() as f64).sqrt(),
+        "σ_r {sd}"
+    );
+}
+
+#[test]
+fn bad_radars_and_standins_are_errors() {
+    let bad = [
+        RotatingRadar {
+            dwells: 0,
+            ..radar()
+        },
+        RotatingRadar {
+            p_detect: 1.5,
+            ..radar()
+        },
+        RotatingRadar {
+            max_range_m: 500.0,
+            ..radar()
+        },
+        RotatingRadar {
+            sigma_bearing_rad: 0.0,
+            ..radar()
+        },
+        RotatingRadar {
+            position: [f64::NAN, 0.0],
+            ..radar()
+        },
+    ];
+    for r in bad {
+        assert!(r.check().is_err(), "{r:?}");
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    assert!(radar().simulate(&[], 0.0, 1e12, &mut rng).is_err());
+    for s in [
+        StandinConfig {
+            aircraft: 0,
+            ..standin()
+        },
+        StandinConfig {
+            speed_m_s: [300.0, 100.0],
+            ..standin()
+        },
+        StandinConfig {
+            duration_s: 1e9,
+            ..standin()
+        },
+    ] {
+        assert!(s.generate(&mut rng).is_err(), "{s:?}");
+    }
+}
