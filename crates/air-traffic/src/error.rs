@@ -6,6 +6,9 @@ pub enum Error {
     /// A parameter outside its range, a non-finite value.
     #[error(transparent)]
     Model(#[from] tracker_model::Error),
+    /// A tracker failed (a bad configuration, a dwell out of order).
+    #[error(transparent)]
+    Tracker(#[from] mcmcda::Error),
     /// The collection is not the JSON the `traffic` package writes.
     #[error("ADS-B collection: {0}")]
     Collection(String),

@@ -10,7 +10,10 @@
 //! * [`RotatingRadar`]: a rotating 2-D radar's dwells over trajectories: range-bearing plots
 //!   with their origins, detection probability and Poisson clutter, from the generator passed
 //!   in; [`RotatingRadar::in_view`] and [`RotatingRadar::measurement_model`] are what a
-//!   tracker (`mcmcda::PlotGnn`) needs of it.
+//!   tracker (`mcmcda::PlotGnn`) needs of it;
+//! * [`track_dwells`], [`truth_points`], [`truth_set`], [`track_set`] and [`score`]: a
+//!   tracker over the dwells, and the truth and its tracks once per revolution with their
+//!   position and velocity errors and the track breaks during turns.
 //!
 //! A stand-in, a radar and its plots:
 //!
@@ -40,6 +43,7 @@ mod error;
 mod geodesy;
 mod radar;
 mod standin;
+mod tracking;
 mod trajectory;
 
 #[cfg(test)]
@@ -50,4 +54,8 @@ pub use error::{Error, Result};
 pub use geodesy::EnuFrame;
 pub use radar::{MAX_DWELLS, MAX_DWELLS_PER_REVOLUTION, RadarDwell, RotatingRadar};
 pub use standin::{MAX_STANDIN_AIRCRAFT, MAX_STANDIN_DURATION_S, StandinConfig};
+pub use tracking::{
+    BirthPrior, KinematicScore, RadarRun, ScoreConfig, TruthPoint, score, track_dwells, track_set,
+    truth_points, truth_set,
+};
 pub use trajectory::{Kinematics, Sample, Trajectory};

@@ -301,3 +301,123 @@ fn bad_radars_and_standins_are_errors() {
         assert!(s.generate(&mut rng).is_err(), "{s:?}");
     }
 }
+
+fn circle_trajectory() -> Vec<Trajectory> {
+    // 200 m/s on a 2°/s circle around a point 30 km east of the radar, for 600 s.
+    let (rate, speed) = (2f64.to_radians(), 200.0);
+    let r = speed / rate;
+    let samples = (0..=600)
+        .map(|k| {
+            let a = rate * k as f64;
+            Sample {
+                time_s: k as f64,
+                position: [30_000.0 + r * a.sin(), r * (1.0 - a.cos())],
+                velocity: [speed * a.cos(), speed * a.sin()],
+            }
+        })
+        .collect();
+    vec![Trajectory::new("circle".into(), samples).unwrap()]
+}
+
+fn score_config() -> ScoreConfig {
+    ScoreConfig {
+        match_distance_m: 1000.0,
+        turn_rate_rad_s: 1f64.to_radians(),
+        turn_half_window_s: 5.0,
+    }
+}
+
+/// A "tracker" that reports the truth itself scores zero error and no break; the same with its
+/// id changed once at revolution 20 scores one break in the 2°/s turn.
+#[test]
+fn scores_of_hand_built_runs() {
+    let r = RotatingRadar {
+        p_detect: 1.0,
+        clutter_per_revolution: 0.0,
+        ..radar()
+    };
+    let trajectories = circle_trajectory();
+    let dwells = r
+        .simulate(&trajectories, 0.0, 600.0, &mut ChaCha8Rng::seed_from_u64(1))
+        .unwrap();
+    let points = truth_points(&r, &trajectories, &dwells);
+    assert!(points.len() >= 58, "{} revolutions seen", points.len());
+    let run_with = |switch_at: u32| RadarRun::<4> {
+        states: points
+            .iter()
+            .map(|p| {
+                let k = trajectories[0].at(p.time_s).unwrap();
+                let mean = nalgebra::Vector4::new(
+                    k.position[0],
+                    k.position[1],
+                    k.velocity[0],
+                    k.velocity[1],
+                );
+                let id = tracker_model::TrackId(if p.frame < switch_at { 1 } else { 2 });
+                let state = mcmcda::PlotTrackState {
+                    id,
+                    time_s: p.time_s,
+                    estimate: tracker_model::Gaussian::new(mean, nalgebra::Matrix4::identity())
+                        .unwrap(),
+                    hit: true,
+                };
+                (p.frame, state)
+            })
+            .collect(),
+        births_refused: 0,
+    };
+    let clean = score(&trajectories, &points, &run_with(u32::MAX), &score_config());
+    assert_eq!((clean.position_rmse_m, clean.velocity_rmse_m_s), (0.0, 0.0));
+    assert_eq!(clean.turning_breaks, 0);
+    assert!(clean.turning_chances >= 50);
+    let switched = score(&trajectories, &points, &run_with(20), &score_config());
+    assert_eq!(switched.turning_breaks, 1);
+    assert_eq!(switched.turning_chances, clean.turning_chances);
+    let truth = truth_set(&trajectories, &points).unwrap();
+    assert_eq!(truth.tracks().len(), 1);
+    assert_eq!(track_set(&run_with(20)).unwrap().tracks().len(), 2);
+}
+
+/// The CV Kalman filter through the radar on an aircraft flying straight at 200 m/s: one
+/// track, errors of the order of the plots' own (50 m in range, 0.002 rad ≈ 60-100 m across at
+/// 30-50 km).
+#[test]
+fn a_tracker_over_the_dwells_follows_the_aircraft() {
+    let r = radar();
+    let samples = (0..=600)
+        .map(|k| Sample {
+            time_s: k as f64,
+            position: [-30_000.0 + 200.0 * k as f64, 20_000.0],
+            velocity: [200.0, 0.0],
+        })
+        .collect();
+    let trajectories = vec![Trajectory::new("straight".into(), samples).unwrap()];
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let dwells = r.simulate(&trajectories, 0.0, 600.0, &mut rng).unwrap();
+    let estimator = tracker_model::SingleModel {
+        motion: tracker_model::ConstantVelocity2::new(
+            1.0,
+            tracker_model::CvNoise::WhiteAcceleration { q: 10.0 },
+        )
+        .unwrap(),
+        filter: tracker_model::GaussianFilter::Extended,
+    };
+    let config = mcmcda::PlotGnnConfig {
+        gate_chi2: 16.0,
+        clutter_log_density: r.clutter_log_density(),
+        confirm_hits: 3,
+        confirm_window: 4,
+        max_misses: 3,
+        max_tracks: 1000,
+    };
+    let mut gnn = mcmcda::PlotGnn::new(estimator, config).unwrap();
+    let birth = BirthPrior {
+        sigma_speed_m_s: 250.0,
+        sigma_turn_rad_s: 0.02,
+    };
+    let run = track_dwells(&mut gnn, &r, &dwells, birth).unwrap();
+    let points = truth_points(&r, &trajectories, &dwells);
+    let s = score(&trajectories, &points, &run, &score_config());
+    assert!(s.matched as f64 >= 0.8 * points.len() as f64, "{s:?}");
+    assert!(s.position_rmse_m < 150.0, "{s:?}");
+}
