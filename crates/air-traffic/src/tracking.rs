@@ -239,11 +239,12 @@ pub fn score<const N: usize>(
             let turning = trajectories[p.trajectory]
                 .turn_rate_at(p.time_s, config.turn_half_window_s)
                 .is_some_and(|w| w.abs() > config.turn_rate_rad_s);
-            if let Some(&(last_frame, last_id)) = previous.get(&p.trajectory) {
-                if turning && last_frame + 1 == *frame {
-                    chances += 1;
-                    breaks += usize::from(now != Some(last_id));
-                }
+            if let Some(&(last_frame, last_id)) = previous.get(&p.trajectory)
+                && turning
+                && last_frame + 1 == *frame
+            {
+                chances += 1;
+                breaks += usize::from(now != Some(last_id));
             }
             match (now, pairs[k]) {
                 (Some(id), Some(j)) => {
