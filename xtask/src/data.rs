@@ -6,6 +6,12 @@
 //! `opencv-doc` package (`apt-get download`, no root needed), decoded by Debian's ffmpeg into
 //! PNG frames 300–794, named by their frame index in the video (`vtest_000300.png` …). The
 //! earlier frames are kept back for outside checks and are never decoded here.
+//!
+//! `adsb`: the `traffic` package's wheel (2.13, MIT; its samples come from OpenSky and others,
+//! under their own terms), downloaded with `pip download --no-deps`; only its quickstart
+//! collection (`traffic/data/samples/collections/quickstart.json.gz`: 213 aircraft, 3 hours
+//! at 1 s) is extracted, to `adsb/quickstart.json`, and the wheel is deleted. The wheel's
+//! other collections are kept back for outside checks and are never extracted.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -15,7 +21,13 @@ use anyhow::{Context, Result, bail, ensure};
 use crate::Outcome;
 
 /// The data sets `fetch-data` knows.
-pub const NAMES: [&str; 1] = ["vtest"];
+pub const NAMES: [&str; 2] = ["vtest", "adsb"];
+
+/// The `traffic` release whose wheel carries the ADS-B quickstart collection.
+pub const TRAFFIC_WHEEL: &str = "traffic==2.13";
+
+/// The quickstart collection's file in the cache's `adsb` folder.
+pub const ADSB_FILE: &str = "quickstart.json";
 
 /// The frames of `vtest.avi` used for development.
 pub const VTEST_FRAMES: (u32, u32) = (300, 794);
@@ -52,6 +64,11 @@ pub fn run(name: &str) -> Outcome {
             );
             Ok(true)
         }
+        "adsb" => {
+            let file = fetch_adsb()?;
+            println!("ADS-B quickstart collection in {}", file.display());
+            Ok(true)
+        }
         other => bail!("no data set \"{other}\"; known: {}", NAMES.join(", ")),
     }
 }
@@ -77,10 +94,42 @@ fn run_in(dir: &Path, program: &str, args: &[&str]) -> Result<()> {
     Ok(())
 }
 
+#[expect(clippy::print_stderr, reason = "progress of a download")]
+fn fetch_adsb() -> Result<PathBuf> {
+    let root = cache_dir()?.join("adsb");
+    let file = root.join(ADSB_FILE);
+    if file.is_file() {
+        return Ok(file);
+    }
+    std::fs::create_dir_all(&root).with_context(|| format!("cannot create {}", root.display()))?;
+    eprintln!("downloading the {TRAFFIC_WHEEL} wheel (≈ 28 MB) into {}", root.display());
+    run_in(
+        &root,
+        "python3",
+        &["-m", "pip", "download", "--no-deps", "--quiet", TRAFFIC_WHEEL, "-d", "."],
+    )?;
+    let wheel = std::fs::read_dir(&root)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .find(|p| p.extension().is_some_and(|x| x == "whl"))
+        .context("pip download left no wheel")?;
+    // A wheel is a zip file; Python (which pip needs anyway) reads it and the gzip member.
+    let script = format!(
+        "import gzip, zipfile; z = zipfile.ZipFile({wheel:?}); \
+         open({ADSB_FILE:?}, 'wb').write(gzip.decompress(z.read(\
+         'traffic/data/samples/collections/quickstart.json.gz')))",
+        wheel = wheel.display().to_string()
+    );
+    run_in(&root, "python3", &["-c", &script])?;
+    std::fs::remove_file(&wheel)?;
+    ensure!(file.is_file(), "the quickstart collection was not extracted");
+    Ok(file)
+}
+
 fn package_of(program: &str) -> &str {
     match program {
         "dpkg-deb" => "dpkg",
         "apt-get" => "apt",
+        "python3" => "python3 python3-pip",
         other => other,
     }
 }

@@ -55,6 +55,15 @@ impl Inputs for WorkspaceFiles {
     fn read_to_string(&self, path: &str) -> Result<String> {
         read_file(&workspace_root().join(path))
     }
+
+    fn fetched(&self, name: &str, file: &str) -> Result<Option<String>> {
+        let path = crate::data::cache_dir()?.join(name).join(file);
+        if path.is_file() {
+            read_file(&path).map(Some)
+        } else {
+            Ok(None)
+        }
+    }
 }
 
 /// A finished scenario run.
@@ -71,10 +80,13 @@ fn scenarios_dir() -> PathBuf {
     workspace_root().join("fixtures/scenarios")
 }
 
-fn expected_path(name: &str) -> PathBuf {
-    workspace_root()
-        .join("fixtures/expected")
-        .join(format!("{name}.json"))
+/// `NAME.json`, or `NAME@DATA.json` for a run on the fetched real data set DATA.
+fn expected_path(name: &str, data: Option<&str>) -> PathBuf {
+    let file = match data {
+        None => format!("{name}.json"),
+        Some(data) => format!("{name}@{data}.json"),
+    };
+    workspace_root().join("fixtures/expected").join(file)
 }
 
 /// Loads every scenario file, sorted by name, optionally filtered; an error when none is left.
@@ -166,8 +178,8 @@ pub fn run_all(scenarios: Vec<Scenario>) -> Vec<RunResult> {
 }
 
 /// Compares metrics with the expected file; returns the problems found (empty = pass).
-fn compare(scenario: &Scenario, metrics: &Metrics) -> Result<Vec<String>> {
-    let path = expected_path(&scenario.name);
+fn compare(scenario: &Scenario, metrics: &Metrics, data: Option<&str>) -> Result<Vec<String>> {
+    let path = expected_path(&scenario.name, data);
     let text = match fs::read_to_string(&path) {
         Ok(text) => text,
         Err(_) => {
@@ -201,11 +213,11 @@ fn compare(scenario: &Scenario, metrics: &Metrics) -> Result<Vec<String>> {
 }
 
 /// Writes the expected file of a scenario (sorted keys, pretty JSON).
-fn bless(scenario: &Scenario, metrics: &Metrics) -> Result<()> {
+fn bless(scenario: &Scenario, metrics: &Metrics, data: Option<&str>) -> Result<()> {
     #[derive(Serialize)]
     #[serde(transparent)]
     struct Sorted<'a>(&'a Metrics);
-    let path = expected_path(&scenario.name);
+    let path = expected_path(&scenario.name, data);
     if let Some(dir) = path.parent() {
         fs::create_dir_all(dir)?;
     }
@@ -274,10 +286,10 @@ pub fn verdicts(results: &[RunResult], bless_results: bool) -> Result<Vec<Verdic
             .collect();
         let metrics = plural(out.metrics.len(), "metric", "metrics");
         let mut summary = if bless_results {
-            bless(&r.scenario, &out.metrics)?;
+            bless(&r.scenario, &out.metrics, out.data.as_deref())?;
             format!("{metrics} written")
         } else {
-            problems.extend(compare(&r.scenario, &out.metrics)?);
+            problems.extend(compare(&r.scenario, &out.metrics, out.data.as_deref())?);
             format!("{metrics} match")
         };
         if !out.claims.is_empty() {

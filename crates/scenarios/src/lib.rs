@@ -83,6 +83,14 @@ impl Progress for NoProgress {
 pub trait Inputs: Sync {
     /// The file's text; the error names the file.
     fn read_to_string(&self, path: &str) -> Result<String>;
+
+    /// The text of `file` in the real data set `name` that `cargo xtask fetch-data NAME`
+    /// keeps outside the repository, or `None` when it has not been fetched (a pipeline then
+    /// runs on its stand-in and says so).
+    fn fetched(&self, name: &str, file: &str) -> Result<Option<String>> {
+        let _ = (name, file);
+        Ok(None)
+    }
 }
 
 /// No input files: every read is an error.
@@ -193,6 +201,12 @@ pub trait Pipeline {
         Vec::new()
     }
 
+    /// The fetched real data set this output came from, if any (see [`Inputs::fetched`]).
+    fn data_set(output: &Self::Output) -> Option<String> {
+        let _ = output;
+        None
+    }
+
     /// Re-runs the searches behind the scenario's settings on its tuning seeds (`cargo xtask
     /// tune NAME`); `None` for a pipeline with nothing tuned.
     fn tune(params: &Self::Params, env: &Env<'_>) -> Result<Option<tune::Tuned>> {
@@ -270,6 +284,9 @@ pub struct Run {
     pub claims: Vec<Claim>,
     /// The rows this run adds to the report's headline table.
     pub headlines: Vec<Headline>,
+    /// The fetched real data set it ran on (`None`: the committed or generated inputs); the
+    /// suite keeps the expected metrics of each apart.
+    pub data: Option<String>,
 }
 
 impl Run {
@@ -356,6 +373,7 @@ fn run_typed<P: Pipeline>(params: &toml::Table, seed: u64, env: &Env<'_>) -> Res
         section,
         claims,
         headlines: P::headlines(&output),
+        data: P::data_set(&output),
     })
 }
 
