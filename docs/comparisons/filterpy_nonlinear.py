@@ -18,6 +18,14 @@ residual_z and z_mean_fn hooks. filterpy's IMM weighs its combined *prior* by th
 probabilities of the last scan; tracker-model uses the predicted ones (Blom & Bar-Shalom
 1988), so the combined prior is not compared: each mode's prior is.
 
+    python3 docs/comparisons/filterpy_nonlinear.py time
+
+times filterpy on the same 43 scans, a whole run per measurement (median of 21; filter
+construction included, nothing recorded), for the EKF
+and UKF with the turn rate in the state and the three-mode EKF IMM: what
+crates/tracker-model/benches/kalman.rs times as ekf_turn_rate_43_scans,
+ukf_turn_rate_43_scans and imm_ekf_cv_ct_43_scans.
+
 It creates /tmp/filterpy-venv and installs filterpy==2.0.0 from PyPI the first time.
 """
 import json, math, os, subprocess, sys
@@ -241,11 +249,15 @@ def scene():
     return times, zs2, zs3
 
 
-def run_single(flt, times, zs):
+def run_single(flt, times, zs, keep=True):
     out, t_last = [], 0.0
     for t, z in zip(times, zs):
         flt.dt = flt._dt = t - t_last
         flt.predict()
+        if not keep:
+            flt.update(z)
+            t_last = t
+            continue
         prior = flt.mean().tolist()
         flt.update(z)
         out.append(dict(prior_mean=prior, mean=flt.mean().tolist(), cov=np.asarray(flt.P).tolist(),
@@ -254,13 +266,17 @@ def run_single(flt, times, zs):
     return out
 
 
-def run_imm(filters, switching, mu0, times, zs):
+def run_imm(filters, switching, mu0, times, zs, keep=True):
     imm = IMMEstimator(filters, np.array(mu0), np.array(switching))
     out, t_last = [], 0.0
     for t, z in zip(times, zs):
         for f in filters:
             f.dt = f._dt = t - t_last
         imm.predict()
+        if not keep:
+            imm.update(z)
+            t_last = t
+            continue
         priors = [f.mean().tolist() for f in filters]
         c_bar = imm.cbar.copy()
         imm.update(z)
@@ -318,7 +334,35 @@ def record(path):
         filterpy.__version__, np.__version__, len(times), len(runs), path))
 
 
+def time_runs():
+    import time
+    times, zs2, _ = scene()
+    t0 = truth(0.0)
+    prior5 = np.array([t0[0] + 50, t0[1] - 40, t0[3] + 5, t0[4] - 3, 0.0])
+    cov5 = np.diag([100.0**2, 100.0**2, 20.0**2, 20.0**2, 0.05**2])
+    rb = RangeBearing()
+    switch3 = [[0.90, 0.05, 0.05], [0.10, 0.85, 0.05], [0.10, 0.05, 0.85]]
+    cases = {
+        "ekf_turn_rate_43_scans": lambda: run_single(
+            EKF(CTRate(1.0, 1e-5), rb, prior5, cov5), times, zs2, keep=False),
+        "ukf_turn_rate_43_scans": lambda: run_single(
+            UKF(CTRate(1.0, 1e-5), rb, prior5, cov5), times, zs2, keep=False),
+        "imm_ekf_cv_ct_43_scans": lambda: run_imm(
+            [EKF(CT4(w, 0.5), rb, prior5[:4], cov5[:4, :4]) for w in (0.0, TURN, -TURN)],
+            switch3, [0.8, 0.1, 0.1], times, zs2, keep=False),
+    }
+    print("filterpy %s, numpy %s" % (filterpy.__version__, np.__version__))
+    for name, f in cases.items():
+        ts = []
+        for _ in range(21):
+            t = time.perf_counter(); f(); ts.append(time.perf_counter() - t)
+        print("%s: median %.3f ms" % (name, sorted(ts)[10] * 1e3))
+
+
 if __name__ == "__main__":
-    if len(sys.argv) != 3 or sys.argv[1] != "record":
+    if len(sys.argv) == 3 and sys.argv[1] == "record":
+        record(sys.argv[2])
+    elif len(sys.argv) == 2 and sys.argv[1] == "time":
+        time_runs()
+    else:
         sys.exit(__doc__)
-    record(sys.argv[2])

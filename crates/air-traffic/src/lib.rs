@@ -13,7 +13,9 @@
 //!   tracker (`mcmcda::PlotGnn`) needs of it;
 //! * [`track_dwells`], [`truth_points`], [`truth_set`], [`track_set`] and [`score`]: a
 //!   tracker over the dwells, and the truth and its tracks once per revolution with their
-//!   position and velocity errors and the track breaks during turns.
+//!   position and velocity errors and the track breaks during turns;
+//! * [`run_tracker`]: the compared trackers ([`RadarTracker`]: CV, coordinated turn by EKF
+//!   or UKF, two IMMs) on one radar run.
 //!
 //! A stand-in, a radar and its plots:
 //!
@@ -43,6 +45,7 @@ mod error;
 mod geodesy;
 mod radar;
 mod standin;
+mod trackers;
 mod tracking;
 mod trajectory;
 
@@ -54,6 +57,7 @@ pub use error::{Error, Result};
 pub use geodesy::EnuFrame;
 pub use radar::{MAX_DWELLS, MAX_DWELLS_PER_REVOLUTION, RadarDwell, RotatingRadar};
 pub use standin::{MAX_STANDIN_AIRCRAFT, MAX_STANDIN_DURATION_S, StandinConfig};
+pub use trackers::{MotionSettings, RadarScene, RadarTracker, TrackerOutcome, run_tracker};
 pub use tracking::{
     BirthPrior, KinematicScore, RadarRun, ScoreConfig, TruthPoint, score, track_dwells, track_set,
     truth_points, truth_set,

@@ -424,6 +424,7 @@ pub fn tune_pipeline(
 
 /// Every pipeline by the name a scenario file gives it.
 const PIPELINES: &[(&str, RunFn)] = &[
+    ("adsb-radar", run_typed::<pipelines::adsb_radar::AdsbRadar>),
     ("audio-doa", run_typed::<pipelines::audio::AudioDoa>),
     ("av-fusion", run_typed::<pipelines::av_fusion::AvFusion>),
     (

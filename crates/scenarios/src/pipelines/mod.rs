@@ -1,5 +1,6 @@
 //! The pipelines a scenario file can name; `PIPELINES` in lib.rs registers them.
 
+pub mod adsb_radar;
 pub mod audio;
 pub mod av_fusion;
 pub mod camnet;
