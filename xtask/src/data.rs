@@ -102,11 +102,23 @@ fn fetch_adsb() -> Result<PathBuf> {
         return Ok(file);
     }
     std::fs::create_dir_all(&root).with_context(|| format!("cannot create {}", root.display()))?;
-    eprintln!("downloading the {TRAFFIC_WHEEL} wheel (≈ 28 MB) into {}", root.display());
+    eprintln!(
+        "downloading the {TRAFFIC_WHEEL} wheel (≈ 28 MB) into {}",
+        root.display()
+    );
     run_in(
         &root,
         "python3",
-        &["-m", "pip", "download", "--no-deps", "--quiet", TRAFFIC_WHEEL, "-d", "."],
+        &[
+            "-m",
+            "pip",
+            "download",
+            "--no-deps",
+            "--quiet",
+            TRAFFIC_WHEEL,
+            "-d",
+            ".",
+        ],
     )?;
     let wheel = std::fs::read_dir(&root)?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -121,7 +133,10 @@ fn fetch_adsb() -> Result<PathBuf> {
     );
     run_in(&root, "python3", &["-c", &script])?;
     std::fs::remove_file(&wheel)?;
-    ensure!(file.is_file(), "the quickstart collection was not extracted");
+    ensure!(
+        file.is_file(),
+        "the quickstart collection was not extracted"
+    );
     Ok(file)
 }
 

@@ -173,8 +173,11 @@ pub fn run_tracker(
                 Box::new(CoordinatedTurn::new(w, motion.q_accel)?),
                 Box::new(CoordinatedTurn::new(-w, motion.q_accel)?),
             ];
-            let switching: Vec<Vec<f64>> =
-                motion.switching_cv_turns.iter().map(|r| r.to_vec()).collect();
+            let switching: Vec<Vec<f64>> = motion
+                .switching_cv_turns
+                .iter()
+                .map(|r| r.to_vec())
+                .collect();
             let imm = Imm::new(modes, &switching, ekf)?
                 .with_start_probabilities(&stationary(&motion.switching_cv_turns))?;
             run_with(imm, gnn, scene)
@@ -184,8 +187,11 @@ pub fn run_tracker(
                 Box::new(ConstantVelocityTurnLayout::new(noise)?),
                 Box::new(CoordinatedTurnRate::new(noise)?),
             ];
-            let switching: Vec<Vec<f64>> =
-                motion.switching_turn_rate.iter().map(|r| r.to_vec()).collect();
+            let switching: Vec<Vec<f64>> = motion
+                .switching_turn_rate
+                .iter()
+                .map(|r| r.to_vec())
+                .collect();
             let imm = Imm::new(modes, &switching, ekf)?
                 .with_start_probabilities(&stationary(&motion.switching_turn_rate))?;
             run_with(imm, gnn, scene)

@@ -58,7 +58,10 @@ fn bench_kalman(c: &mut Criterion) {
 
 /// The 43 range-bearing plots of the filterpy reference, with their times.
 fn reference_scans() -> (Vec<(f64, nalgebra::Vector2<f64>)>, serde_json::Value) {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/testdata/filterpy_nonlinear.json");
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/testdata/filterpy_nonlinear.json"
+    );
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap();
     let num = |v: &serde_json::Value| v.as_f64().unwrap();
@@ -72,13 +75,17 @@ fn reference_scans() -> (Vec<(f64, nalgebra::Vector2<f64>)>, serde_json::Value) 
 
 fn bench_nonlinear(c: &mut Criterion) {
     use tracker_model::{
-        CoordinatedTurn, CoordinatedTurnRate, GaussianFilter, Imm, Mode, RangeBearing,
-        SigmaPoints, SingleModel, StateEstimator, TurnNoise,
+        CoordinatedTurn, CoordinatedTurnRate, GaussianFilter, Imm, Mode, RangeBearing, SigmaPoints,
+        SingleModel, StateEstimator, TurnNoise,
     };
     let (scans, doc) = reference_scans();
     let num = |v: &serde_json::Value| v.as_f64().unwrap();
     let flat = |v: &serde_json::Value| -> Vec<f64> {
-        v.as_array().unwrap().iter().flat_map(|r| r.as_array().unwrap().iter().map(num)).collect()
+        v.as_array()
+            .unwrap()
+            .iter()
+            .flat_map(|r| r.as_array().unwrap().iter().map(num))
+            .collect()
     };
     let mean5 = nalgebra::SVector::<f64, 5>::from_iterator(
         doc["prior5"]["mean"].as_array().unwrap().iter().map(num),
@@ -115,12 +122,18 @@ fn bench_nonlinear(c: &mut Criterion) {
     let rb5 = RangeBearing::<5>::at(site, sr, sb).unwrap();
     let rb4 = RangeBearing::<4>::at(site, sr, sb).unwrap();
     let ct = CoordinatedTurnRate::new(noise).unwrap();
-    let ekf = SingleModel { motion: ct, filter: GaussianFilter::Extended };
+    let ekf = SingleModel {
+        motion: ct,
+        filter: GaussianFilter::Extended,
+    };
     c.bench_function("ekf_turn_rate_43_scans", |b| {
         b.iter(|| run(&ekf, &rb5, black_box(&prior5), &scans))
     });
     let sigma = SigmaPoints::new(0.5, 2.0, -1.0).unwrap();
-    let ukf = SingleModel { motion: ct, filter: GaussianFilter::Unscented(sigma) };
+    let ukf = SingleModel {
+        motion: ct,
+        filter: GaussianFilter::Unscented(sigma),
+    };
     c.bench_function("ukf_turn_rate_43_scans", |b| {
         b.iter(|| run(&ukf, &rb5, black_box(&prior5), &scans))
     });
