@@ -171,8 +171,14 @@ fn parse_requirements(text: &str) -> Result<Vec<Requirement>> {
     clippy::print_stderr,
     reason = "the evaluation is printed on the terminal, notes on stderr"
 )]
-pub fn run(gt: &Path, pred: &Path, iou: f64, json: bool, require: Option<&str>) -> Outcome {
-    let evaluation = evaluate_files(gt, pred, iou, json, require)?;
+pub fn run(
+    gt: &Path,
+    pred: &Path,
+    matching: Matching,
+    json: bool,
+    require: Option<&str>,
+) -> Outcome {
+    let evaluation = evaluate_files(gt, pred, matching, json, require)?;
     for note in &evaluation.notes {
         eprintln!("note: {note}");
     }
@@ -191,10 +197,71 @@ struct Evaluation {
     all_hold: bool,
 }
 
+/// What the two files hold and how their objects match.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Matching {
+    /// MOTChallenge boxes, matched at IoU ≥ the threshold.
+    Boxes {
+        /// The IoU threshold.
+        iou: f64,
+    },
+    /// Point CSVs (`time_s,id,x,y`; a track file's `track_id` serves as the id), matched
+    /// within the distance; OSPA and GOSPA with that cut-off (p = 2) are added.
+    Points {
+        /// The distance threshold and OSPA cut-off.
+        distance: f64,
+    },
+}
+
+/// The two files as track sets, with any notes on reading them.
+fn load_sets(gt: &Path, pred: &Path, matching: Matching) -> Result<EvaluationPair> {
+    match matching {
+        Matching::Boxes { .. } => load_with_notes(gt, pred),
+        Matching::Points { .. } => {
+            let (gt_set, pred_set) =
+                air_traffic::point_track_sets(&read_file(gt)?, &read_file(pred)?)
+                    .with_context(|| format!("reading {} and {}", gt.display(), pred.display()))?;
+            Ok(EvaluationPair {
+                gt: gt_set,
+                pred: pred_set,
+                notes: Vec::new(),
+            })
+        }
+    }
+}
+
+/// Mean OSPA and GOSPA over the frames, for point matching.
+fn ospa_rows(
+    gt: &tracker_model::TrackSet,
+    pred: &tracker_model::TrackSet,
+    matching: Matching,
+) -> Result<Vec<(String, f64)>> {
+    let Matching::Points { distance } = matching else {
+        return Ok(Vec::new());
+    };
+    let cfg = eval_metrics::OspaConfig {
+        cutoff: distance,
+        order: 2.0,
+    };
+    let mean = |v: Vec<f64>| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    let ospa = eval_metrics::ospa_over_time(gt, pred, &cfg)?;
+    let gospa = eval_metrics::gospa_over_time(gt, pred, &cfg)?;
+    Ok(vec![
+        (
+            format!("OSPA (c = {distance}, p = 2, mean over frames)"),
+            mean(ospa.iter().map(|(_, o)| o.distance).collect()),
+        ),
+        (
+            format!("GOSPA (c = {distance}, p = 2, mean over frames)"),
+            mean(gospa.iter().map(|(_, g)| g.distance).collect()),
+        ),
+    ])
+}
+
 fn evaluate_files(
     gt: &Path,
     pred: &Path,
-    iou: f64,
+    matching: Matching,
     json: bool,
     require: Option<&str>,
 ) -> Result<Evaluation> {
@@ -206,18 +273,29 @@ fn evaluate_files(
         gt: gt_set,
         pred: pred_set,
         notes,
-    } = load_with_notes(gt, pred)?;
-    let config = EvalConfig {
-        matching: MatchConfig::iou(iou),
+    } = load_sets(gt, pred, matching)?;
+    let (config, rule) = match matching {
+        Matching::Boxes { iou } => (MatchConfig::iou(iou), format!("IoU ≥ {iou}")),
+        Matching::Points { distance } => (
+            MatchConfig::within_distance(distance),
+            format!("distance ≤ {distance}"),
+        ),
     };
+    let config = EvalConfig { matching: config };
     let report = evaluate(&gt_set, &pred_set, &config).context("evaluation failed")?;
     let values = rows(&report);
+    let extra = ospa_rows(&gt_set, &pred_set, matching)?;
     let printed = if json {
-        serde_json::to_string_pretty(&report)?
+        let mut value = serde_json::to_value(&report)?;
+        if let (Some(map), false) = (value.as_object_mut(), extra.is_empty()) {
+            map.insert("ospa_mean".into(), extra[0].1.into());
+            map.insert("gospa_mean".into(), extra[1].1.into());
+        }
+        serde_json::to_string_pretty(&value)?
     } else {
         let mut table = Table::new(
             &format!(
-                "{} against {} (IoU ≥ {iou}; {} truth tracks, {} estimated tracks)",
+                "{} against {} ({rule}; {} truth tracks, {} estimated tracks)",
                 pred.display(),
                 gt.display(),
                 gt_set.len(),
@@ -227,6 +305,9 @@ fn evaluate_files(
         );
         for (name, value) in &values {
             table.row(vec![name.to_string(), fmt_num(*value)]);
+        }
+        for (name, value) in &extra {
+            table.row(vec![name.clone(), fmt_num(*value)]);
         }
         to_markdown(&table)
     };
@@ -261,13 +342,47 @@ fn evaluate_files(
 mod tests {
     use super::*;
 
+    /// Point files: a track file scored against truth 1 m off everywhere (distance 10): every
+    /// truth point matched (MOTA 1), OSPA 1 (p = 2, one pair 1 m apart per frame), and a
+    /// frame's missing estimate costs a miss and the cut-off.
+    #[test]
+    fn point_files_score_by_distance_with_ospa() {
+        let dir = std::env::temp_dir().join(format!("xtask-eval-points-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (gt, pred) = (dir.join("truth.csv"), dir.join("tracks.csv"));
+        std::fs::write(&gt, "time_s,id,x,y\n0,1,0,0\n10,1,100,0\n20,1,200,0\n").unwrap();
+        std::fs::write(
+            &pred,
+            "time_s,track_id,x,y,vx,vy\n0,5,0,1,10,0\n10,5,100,1,10,0\n20,5,200,1,10,0\n",
+        )
+        .unwrap();
+        let matching = Matching::Points { distance: 10.0 };
+        let run = evaluate_files(&gt, &pred, matching, true, Some("MOTA>=1")).unwrap();
+        let parsed: serde_json::Value = serde_json::from_str(&run.printed).unwrap();
+        assert!(run.all_hold, "{}", run.printed);
+        assert_eq!(parsed["ospa_mean"].as_f64(), Some(1.0));
+        std::fs::write(&pred, "time_s,track_id,x,y\n0,5,0,1\n20,5,200,1\n").unwrap();
+        let run = evaluate_files(&gt, &pred, matching, true, None).unwrap();
+        let parsed: serde_json::Value = serde_json::from_str(&run.printed).unwrap();
+        // Frames 0 and 2 cost 1 m, frame 1 the cut-off 10: mean (1 + 10 + 1) / 3.
+        assert_eq!(parsed["ospa_mean"].as_f64(), Some(4.0));
+        assert!((parsed["clear"]["mota"].as_f64().unwrap() - 2.0 / 3.0).abs() < 1e-12);
+    }
+
     #[test]
     fn json_stays_parseable_with_requirements() {
         let dir = std::env::temp_dir().join(format!("xtask-eval-json-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let gt = dir.join("gt.txt");
         std::fs::write(&gt, "1,1,0,0,10,10,1,-1,-1,-1\n2,1,1,0,10,10,1,-1,-1,-1\n").unwrap();
-        let run = evaluate_files(&gt, &gt, 0.5, true, Some("MOTA>=0.9,IDF1<0.5")).unwrap();
+        let run = evaluate_files(
+            &gt,
+            &gt,
+            Matching::Boxes { iou: 0.5 },
+            true,
+            Some("MOTA>=0.9,IDF1<0.5"),
+        )
+        .unwrap();
         let parsed: serde_json::Value = serde_json::from_str(&run.printed).unwrap();
         assert!(parsed.is_object(), "{}", run.printed);
         assert_eq!(run.verdicts.len(), 2, "{:?}", run.verdicts);
@@ -306,7 +421,10 @@ mod tests {
         std::fs::write(&gt, "1,1,0,0,10,10,1,-1,-1,-1\n").unwrap();
         std::fs::write(&empty, "").unwrap();
         // Empty ground truth: an error (it used to score MOTA −90 against nothing).
-        let err = format!("{:#}", run(&empty, &gt, 0.5, true, None).unwrap_err());
+        let err = format!(
+            "{:#}",
+            run(&empty, &gt, Matching::Boxes { iou: 0.5 }, true, None).unwrap_err()
+        );
         assert!(
             err.contains("empty.txt") && err.contains("no ground truth"),
             "{err}"
@@ -319,7 +437,10 @@ mod tests {
         assert!(report.clear.mota.abs() < 1e-12, "{}", report.clear.mota);
         // A zero-area box is an error at parse time (it used to count as FP 1, FN 1).
         std::fs::write(&empty, "1,1,0,0,0,10\n").unwrap();
-        let err = format!("{:#}", run(&gt, &empty, 0.5, true, None).unwrap_err());
+        let err = format!(
+            "{:#}",
+            run(&gt, &empty, Matching::Boxes { iou: 0.5 }, true, None).unwrap_err()
+        );
         assert!(err.contains("zero area") && err.contains("line 1"), "{err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }

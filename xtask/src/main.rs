@@ -19,6 +19,7 @@ mod eval;
 mod fuzz;
 mod junit;
 mod plot;
+mod plot_track;
 mod real_video;
 mod report;
 mod scenario;
@@ -130,6 +131,11 @@ enum Command {
         /// IoU a box pair needs to match.
         #[arg(long, default_value_t = 0.5)]
         iou: f64,
+        /// Score point tracks instead of boxes: both files are CSVs with a header (time_s,
+        /// id or track_id, x, y; what `track --plots` writes), matched within this distance,
+        /// with OSPA and GOSPA at this cut-off (docs/aircraft.md).
+        #[arg(long, conflicts_with = "iou")]
+        distance: Option<f64>,
         /// Print JSON instead of a table.
         #[arg(long)]
         json: bool,
@@ -165,7 +171,10 @@ fn main() -> ExitCode {
         ),
         Command::Ci { determinism_only } => ci::run(determinism_only),
         Command::Fuzz { seconds, filter } => fuzz::run(seconds, filter.as_deref()),
-        Command::Track(args) => track::run(&args.request()),
+        Command::Track(args) => match &args.plots {
+            Some(plots) => plot_track::run(plots, &args),
+            None => track::run(&args.request()),
+        },
         Command::FetchData { name } => data::run(&name),
         Command::Tune { name, check } => tune::run(&name, check),
         Command::Walkers {
@@ -178,9 +187,16 @@ fn main() -> ExitCode {
             gt,
             pred,
             iou,
+            distance,
             json,
             require,
-        } => eval::run(&gt, &pred, iou, json, require.as_deref()),
+        } => {
+            let matching = match distance {
+                Some(distance) => eval::Matching::Points { distance },
+                None => eval::Matching::Boxes { iou },
+            };
+            eval::run(&gt, &pred, matching, json, require.as_deref())
+        }
     };
     match outcome {
         Ok(true) => ExitCode::SUCCESS,

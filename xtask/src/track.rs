@@ -48,10 +48,10 @@ pub struct TrackArgs {
     /// SMC-PHD on the boxes themselves; sort, bytetrack, ocsort: SORT, ByteTrack and OC-SORT
     /// with roboflow trackers 2.6.1's defaults (the detections' own boxes, `[sort]`,
     /// `[bytetrack]`, `[ocsort]`).
-    #[arg(long, required_unless_present = "print_config")]
+    #[arg(long, required_unless_present_any = ["print_config", "plots"])]
     pub tracker: Option<mot::track::TrackerKind>,
     /// Detections (frame,id,left,top,width,height,conf,...).
-    #[arg(long, required_unless_present_any = ["print_config", "video"])]
+    #[arg(long, required_unless_present_any = ["print_config", "video", "plots"])]
     pub input: Option<PathBuf>,
     /// Where to write the tracks.
     #[arg(long, required_unless_present = "print_config")]
@@ -107,6 +107,16 @@ pub struct TrackArgs {
     /// image local detectors (the frames are then only drawn on by --overlay).
     #[arg(long)]
     pub no_fusion: bool,
+    /// A radar plot file (CSV with a header: time_s, sensor, sensor_x, sensor_y, then x, y
+    /// or range, bearing, optionally their sigmas; docs/aircraft.md), tracked by GNN with
+    /// --filter instead of --tracker; the tracks are written as CSV
+    /// (time_s,track_id,x,y,vx,vy). --config then holds air_traffic::PlotTrackConfig's keys.
+    #[arg(long, conflicts_with_all = ["input", "video", "frames", "tracker", "online"])]
+    pub plots: Option<PathBuf>,
+    /// With --plots: kf (constant velocity, position plots), ekf or ukf (coordinated turn
+    /// with the rate in the state) or imm (CV and turns at ±3°/s).
+    #[arg(long, requires = "plots", default_value = "imm")]
+    pub filter: String,
 }
 
 impl TrackArgs {

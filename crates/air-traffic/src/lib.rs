@@ -15,7 +15,11 @@
 //!   tracker over the dwells, and the truth and its tracks once per revolution with their
 //!   position and velocity errors and the track breaks during turns;
 //! * [`run_tracker`]: the compared trackers ([`RadarTracker`]: CV, coordinated turn by EKF
-//!   or UKF, two IMMs) on one radar run.
+//!   or UKF, two IMMs) on one radar run;
+//! * [`parse_plots`], [`track_plots`], [`format_tracks`], [`point_track_sets`]: users' own
+//!   plot files (CSV: positions or range-bearing from sensors at known positions) tracked
+//!   with `kf`, `ekf`, `ukf` or `imm`, and point tracks scored against point truth (what
+//!   `cargo xtask track --plots` and `cargo xtask eval --distance` run).
 //!
 //! A stand-in, a radar and its plots:
 //!
@@ -43,6 +47,7 @@
 mod adsb;
 mod error;
 mod geodesy;
+mod plot_file;
 mod radar;
 mod standin;
 mod trackers;
@@ -55,6 +60,10 @@ mod tests;
 pub use adsb::{MAX_REPORTS, ReadConfig, read_collection};
 pub use error::{Error, Result};
 pub use geodesy::EnuFrame;
+pub use plot_file::{
+    MAX_PLOT_ROWS, PlotFilter, PlotRow, PlotTrackConfig, PlotValue, TrackRow, format_tracks,
+    parse_plots, point_track_sets, track_plots,
+};
 pub use radar::{MAX_DWELLS, MAX_DWELLS_PER_REVOLUTION, RadarDwell, RotatingRadar};
 pub use standin::{MAX_STANDIN_AIRCRAFT, MAX_STANDIN_DURATION_S, StandinConfig};
 pub use trackers::{MotionSettings, RadarScene, RadarTracker, TrackerOutcome, run_tracker};

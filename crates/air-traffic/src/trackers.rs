@@ -134,6 +134,70 @@ fn run_with<E: StateEstimator<N>, const N: usize>(
     })
 }
 
+/// The CV filter of [`RadarTracker::Cv`].
+pub(crate) fn cv_estimator(motion: &MotionSettings) -> Result<SingleModel<ConstantVelocity2>> {
+    Ok(SingleModel {
+        motion: cv(motion.q_accel)?,
+        filter: GaussianFilter::Extended,
+    })
+}
+
+/// The turn-rate filter of [`RadarTracker::Ct`] (EKF) or [`RadarTracker::CtUkf`].
+pub(crate) fn ct_estimator(
+    motion: &MotionSettings,
+    unscented: bool,
+) -> Result<SingleModel<CoordinatedTurnRate>> {
+    let filter = if unscented {
+        GaussianFilter::Unscented(motion.sigma_points)
+    } else {
+        GaussianFilter::Extended
+    };
+    Ok(SingleModel {
+        motion: CoordinatedTurnRate::new(turn_noise(motion))?,
+        filter,
+    })
+}
+
+fn turn_noise(motion: &MotionSettings) -> TurnNoise {
+    TurnNoise {
+        q_accel: motion.q_accel,
+        q_turn: motion.q_turn,
+    }
+}
+
+/// The IMM of [`RadarTracker::ImmCvTurns`].
+pub(crate) fn imm_cv_turns(motion: &MotionSettings) -> Result<Imm<4>> {
+    let w = motion.imm_turn_rate_rad_s;
+    let modes: Vec<Mode<4>> = vec![
+        Box::new(cv(motion.q_accel)?),
+        Box::new(CoordinatedTurn::new(w, motion.q_accel)?),
+        Box::new(CoordinatedTurn::new(-w, motion.q_accel)?),
+    ];
+    let switching: Vec<Vec<f64>> = motion
+        .switching_cv_turns
+        .iter()
+        .map(|r| r.to_vec())
+        .collect();
+    Ok(Imm::new(modes, &switching, GaussianFilter::Extended)?
+        .with_start_probabilities(&stationary(&motion.switching_cv_turns))?)
+}
+
+/// The IMM of [`RadarTracker::ImmTurnRate`].
+fn imm_turn_rate(motion: &MotionSettings) -> Result<Imm<5>> {
+    let noise = turn_noise(motion);
+    let modes: Vec<Mode<5>> = vec![
+        Box::new(ConstantVelocityTurnLayout::new(noise)?),
+        Box::new(CoordinatedTurnRate::new(noise)?),
+    ];
+    let switching: Vec<Vec<f64>> = motion
+        .switching_turn_rate
+        .iter()
+        .map(|r| r.to_vec())
+        .collect();
+    Ok(Imm::new(modes, &switching, GaussianFilter::Extended)?
+        .with_start_probabilities(&stationary(&motion.switching_turn_rate))?)
+}
+
 /// Runs `tracker` with `motion` and `gnn` on `scene`.
 pub fn run_tracker(
     tracker: RadarTracker,
@@ -141,61 +205,12 @@ pub fn run_tracker(
     gnn: PlotGnnConfig,
     scene: &RadarScene<'_>,
 ) -> Result<TrackerOutcome> {
-    let noise = TurnNoise {
-        q_accel: motion.q_accel,
-        q_turn: motion.q_turn,
-    };
-    let ekf = GaussianFilter::Extended;
     match tracker {
-        RadarTracker::Cv => {
-            let estimator = SingleModel {
-                motion: cv(motion.q_accel)?,
-                filter: ekf,
-            };
-            run_with(estimator, gnn, scene)
-        }
-        RadarTracker::Ct | RadarTracker::CtUkf => {
-            let filter = if tracker == RadarTracker::Ct {
-                ekf
-            } else {
-                GaussianFilter::Unscented(motion.sigma_points)
-            };
-            let estimator = SingleModel {
-                motion: CoordinatedTurnRate::new(noise)?,
-                filter,
-            };
-            run_with(estimator, gnn, scene)
-        }
-        RadarTracker::ImmCvTurns => {
-            let w = motion.imm_turn_rate_rad_s;
-            let modes: Vec<Mode<4>> = vec![
-                Box::new(cv(motion.q_accel)?),
-                Box::new(CoordinatedTurn::new(w, motion.q_accel)?),
-                Box::new(CoordinatedTurn::new(-w, motion.q_accel)?),
-            ];
-            let switching: Vec<Vec<f64>> = motion
-                .switching_cv_turns
-                .iter()
-                .map(|r| r.to_vec())
-                .collect();
-            let imm = Imm::new(modes, &switching, ekf)?
-                .with_start_probabilities(&stationary(&motion.switching_cv_turns))?;
-            run_with(imm, gnn, scene)
-        }
-        RadarTracker::ImmTurnRate => {
-            let modes: Vec<Mode<5>> = vec![
-                Box::new(ConstantVelocityTurnLayout::new(noise)?),
-                Box::new(CoordinatedTurnRate::new(noise)?),
-            ];
-            let switching: Vec<Vec<f64>> = motion
-                .switching_turn_rate
-                .iter()
-                .map(|r| r.to_vec())
-                .collect();
-            let imm = Imm::new(modes, &switching, ekf)?
-                .with_start_probabilities(&stationary(&motion.switching_turn_rate))?;
-            run_with(imm, gnn, scene)
-        }
+        RadarTracker::Cv => run_with(cv_estimator(motion)?, gnn, scene),
+        RadarTracker::Ct => run_with(ct_estimator(motion, false)?, gnn, scene),
+        RadarTracker::CtUkf => run_with(ct_estimator(motion, true)?, gnn, scene),
+        RadarTracker::ImmCvTurns => run_with(imm_cv_turns(motion)?, gnn, scene),
+        RadarTracker::ImmTurnRate => run_with(imm_turn_rate(motion)?, gnn, scene),
     }
 }
 
