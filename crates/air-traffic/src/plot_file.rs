@@ -337,25 +337,13 @@ fn step_dwell<E: StateEstimator<N>, const N: usize>(
             let in_view = |z: &SVector<f64, 2>| {
                 (z[0] - centre[0]).hypot(z[1] - centre[1]) <= config.max_range_m
             };
-            let start = |z: &SVector<f64, 2>| position_prior::<N>(z, &r, &birth);
-            gnn.step(&Dwell {
-                time_s: first.time_s,
-                sensor: &sensor,
-                plots: &plots,
-                in_view: &in_view,
-                birth: &start,
-            })?
+            let start = |z: &SVector<f64, 2>| birth.around::<N>(z, &r);
+            step_with(gnn, first.time_s, &sensor, &plots, &in_view, &start)?
         }
         Sensor::Polar(sensor) => {
             let in_view = |z: &SVector<f64, 2>| z[0] <= config.max_range_m;
             let start = |z: &SVector<f64, 2>| birth.at(&sensor, z);
-            gnn.step(&Dwell {
-                time_s: first.time_s,
-                sensor: &sensor,
-                plots: &plots,
-                in_view: &in_view,
-                birth: &start,
-            })?
+            step_with(gnn, first.time_s, &sensor, &plots, &in_view, &start)?
         }
     };
     out.extend(states.into_iter().map(|s| {
@@ -370,25 +358,22 @@ fn step_dwell<E: StateEstimator<N>, const N: usize>(
     Ok(())
 }
 
-/// A new track at a position plot: the plot with its noise, velocity (and turn rate) unknown.
-fn position_prior<const N: usize>(
-    z: &SVector<f64, 2>,
-    r: &SMatrix<f64, 2, 2>,
-    birth: &BirthPrior,
-) -> tracker_model::Result<Gaussian<N>> {
-    let mut mean = SVector::<f64, N>::zeros();
-    let mut cov = SMatrix::<f64, N, N>::zeros();
-    mean.fixed_rows_mut::<2>(0).copy_from(z);
-    cov.fixed_view_mut::<2, 2>(0, 0).copy_from(r);
-    for i in 2..N {
-        let s = if i < 4 {
-            birth.sigma_speed_m_s
-        } else {
-            birth.sigma_turn_rad_s
-        };
-        cov[(i, i)] = s * s;
-    }
-    Gaussian::new(mean, cov)
+/// One [`Dwell`] of `sensor`'s plots at `time_s`.
+fn step_with<E: StateEstimator<N>, O: MeasurementModel<N, 2>, const N: usize>(
+    gnn: &mut PlotGnn<E, N>,
+    time_s: f64,
+    sensor: &O,
+    plots: &[SVector<f64, 2>],
+    in_view: &dyn Fn(&SVector<f64, 2>) -> bool,
+    birth: &dyn Fn(&SVector<f64, 2>) -> tracker_model::Result<Gaussian<N>>,
+) -> Result<Vec<mcmcda::PlotTrackState<N>>> {
+    Ok(gnn.step(&Dwell {
+        time_s,
+        sensor,
+        plots,
+        in_view,
+        birth,
+    })?)
 }
 
 fn run_all<E: StateEstimator<N>, const N: usize>(

@@ -319,6 +319,18 @@ fn circle_trajectory() -> Vec<Trajectory> {
     vec![Trajectory::new("circle".into(), samples).unwrap()]
 }
 
+/// 200 m/s due east along y = 20 km for 600 s.
+fn straight_trajectory() -> Vec<Trajectory> {
+    let samples = (0..=600)
+        .map(|k| Sample {
+            time_s: k as f64,
+            position: [-30_000.0 + 200.0 * k as f64, 20_000.0],
+            velocity: [200.0, 0.0],
+        })
+        .collect();
+    vec![Trajectory::new("straight".into(), samples).unwrap()]
+}
+
 fn score_config() -> ScoreConfig {
     ScoreConfig {
         match_distance_m: 1000.0,
@@ -384,14 +396,7 @@ fn scores_of_hand_built_runs() {
 #[test]
 fn a_tracker_over_the_dwells_follows_the_aircraft() {
     let r = radar();
-    let samples = (0..=600)
-        .map(|k| Sample {
-            time_s: k as f64,
-            position: [-30_000.0 + 200.0 * k as f64, 20_000.0],
-            velocity: [200.0, 0.0],
-        })
-        .collect();
-    let trajectories = vec![Trajectory::new("straight".into(), samples).unwrap()];
+    let trajectories = straight_trajectory();
     let mut rng = ChaCha8Rng::seed_from_u64(2);
     let dwells = r.simulate(&trajectories, 0.0, 600.0, &mut rng).unwrap();
     let estimator = tracker_model::SingleModel {
@@ -489,14 +494,7 @@ fn a_plot_file_round_trip_tracks_and_scores() {
         clutter_per_revolution: 5.0,
         ..radar()
     };
-    let samples = (0..=600)
-        .map(|k| Sample {
-            time_s: k as f64,
-            position: [-30_000.0 + 200.0 * k as f64, 20_000.0],
-            velocity: [200.0, 0.0],
-        })
-        .collect();
-    let trajectories = vec![Trajectory::new("straight".into(), samples).unwrap()];
+    let trajectories = straight_trajectory();
     let dwells = r
         .simulate(&trajectories, 0.0, 600.0, &mut ChaCha8Rng::seed_from_u64(4))
         .unwrap();

@@ -38,10 +38,19 @@ impl BirthPrior {
         z: &SVector<f64, 2>,
     ) -> tracker_model::Result<Gaussian<N>> {
         let (p, pc) = sensor.position_of(z);
+        self.around(&p, &pc)
+    }
+
+    /// The prior of a track started at a position with this covariance.
+    pub fn around<const N: usize>(
+        &self,
+        position: &SVector<f64, 2>,
+        covariance: &SMatrix<f64, 2, 2>,
+    ) -> tracker_model::Result<Gaussian<N>> {
         let mut mean = SVector::<f64, N>::zeros();
         let mut cov = SMatrix::<f64, N, N>::zeros();
-        mean.fixed_rows_mut::<2>(0).copy_from(&p);
-        cov.fixed_view_mut::<2, 2>(0, 0).copy_from(&pc);
+        mean.fixed_rows_mut::<2>(0).copy_from(position);
+        cov.fixed_view_mut::<2, 2>(0, 0).copy_from(covariance);
         for i in 2..N {
             let sigma = if i < 4 {
                 self.sigma_speed_m_s
