@@ -353,7 +353,7 @@ mod tests {
         std::fs::write(&gt, "time_s,id,x,y\n0,1,0,0\n10,1,100,0\n20,1,200,0\n").unwrap();
         std::fs::write(
             &pred,
-            "time_s,track_id,x,y,vx,vy\n0,5,0,1,10,0\n10,5,100,1,10,0\n20,5,200,1,10,0\n",
+            "time_s,track_id,x,y,vx,vy,hit\n0,5,0,1,10,0,1\n10,5,100,1,10,0,1\n20,5,200,1,10,0,1\n",
         )
         .unwrap();
         let matching = Matching::Points { distance: 10.0 };

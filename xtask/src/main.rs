@@ -121,6 +121,14 @@ enum Command {
         check: bool,
     },
     /// Score a tracker's MOTChallenge output against MOTChallenge ground truth.
+    /// Writes the adsb-radar scenario's radar runs (the tuning run and each reported seed) as
+    /// plot and truth files to a folder: the real collection when fetched, else the stand-in.
+    /// For peers run outside the suite (docs/comparisons/stonesoup_adsb.py).
+    ExportPlots {
+        /// The folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
     Eval {
         /// Ground truth (frame,id,left,top,width,height,conf,...); rows with conf 0 are ignored.
         #[arg(long)]
@@ -183,6 +191,7 @@ fn main() -> ExitCode {
             seconds,
             out,
         } => track::write_walkers(seed, fps, seconds, &out),
+        Command::ExportPlots { out } => plot_track::export(&out),
         Command::Eval {
             gt,
             pred,

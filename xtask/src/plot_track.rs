@@ -47,6 +47,33 @@ pub fn run(plots: &Path, args: &TrackArgs) -> Outcome {
     Ok(true)
 }
 
+/// `cargo xtask export-plots --out DIR`.
+#[expect(clippy::print_stdout, reason = "where the files went")]
+pub fn export(out: &Path) -> Outcome {
+    let scenario = crate::scenario::load_all(Some("adsb-radar"))?
+        .into_iter()
+        .find(|s| s.name == "adsb-radar")
+        .context("no fixtures/scenarios/adsb-radar.toml")?;
+    let env = scenarios::Env::new(
+        &scenarios::NoProgress,
+        &crate::scenario::WorkspaceFiles,
+        &scenarios::NoClock,
+    );
+    let (data, files) =
+        scenarios::export_adsb_radar_plots(&scenario.file.params, scenario.file.seed, &env)?;
+    fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
+    for (name, text) in &files {
+        fs::write(out.join(name), text).with_context(|| format!("writing {name}"))?;
+    }
+    println!(
+        "{} files from {} in {}",
+        files.len(),
+        data.as_deref().unwrap_or("the stand-in"),
+        out.display()
+    );
+    Ok(true)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -110,7 +110,7 @@ pub struct TrackArgs {
     /// A radar plot file (CSV with a header: time_s, sensor, sensor_x, sensor_y, then x, y
     /// or range, bearing, optionally their sigmas; docs/aircraft.md), tracked by GNN with
     /// --filter instead of --tracker; the tracks are written as CSV
-    /// (time_s,track_id,x,y,vx,vy). --config then holds air_traffic::PlotTrackConfig's keys.
+    /// (time_s,track_id,x,y,vx,vy,hit). --config then holds air_traffic::PlotTrackConfig's keys.
     #[arg(long, conflicts_with_all = ["input", "video", "frames", "tracker", "online"])]
     pub plots: Option<PathBuf>,
     /// With --plots: kf (constant velocity, position plots), ekf or ukf (coordinated turn

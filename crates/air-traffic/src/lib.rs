@@ -61,8 +61,8 @@ pub use adsb::{MAX_REPORTS, ReadConfig, read_collection};
 pub use error::{Error, Result};
 pub use geodesy::EnuFrame;
 pub use plot_file::{
-    MAX_PLOT_ROWS, PlotFilter, PlotRow, PlotTrackConfig, PlotValue, TrackRow, format_tracks,
-    parse_plots, point_track_sets, track_plots,
+    MAX_PLOT_ROWS, PlotFilter, PlotRow, PlotTrackConfig, PlotValue, TrackRow, format_radar_run,
+    format_tracks, parse_plots, point_track_sets, track_plots,
 };
 pub use radar::{MAX_DWELLS, MAX_DWELLS_PER_REVOLUTION, RadarDwell, RotatingRadar};
 pub use standin::{MAX_STANDIN_AIRCRAFT, MAX_STANDIN_DURATION_S, StandinConfig};

@@ -9,8 +9,8 @@
 //!   without them, the configuration's.
 //!
 //! Plots with the same time, sensor and noise form one dwell. Every sensor is taken to see
-//! everything within `max_range_m`. Tracks (`time_s,track_id,x,y,vx,vy`) are written at
-//! every dwell that saw them. Truth for `eval` is `time_s,id,x,y`, and a track file reads as
+//! everything within `max_range_m`. Tracks (`time_s,track_id,x,y,vx,vy,hit`) are written at
+//! every dwell that saw them, `hit` 1 when a plot updated them. Truth for `eval` is `time_s,id,x,y`, and a track file reads as
 //! the same; frames are the distinct times of both files.
 
 use std::collections::BTreeMap;
@@ -267,6 +267,8 @@ pub struct TrackRow {
     pub position: [f64; 2],
     /// Velocity, m/s.
     pub velocity: [f64; 2],
+    /// Whether a plot updated it at this dwell (else it coasted).
+    pub hit: bool,
 }
 
 /// The sensor model of a dwell: positions or range-bearing, with its noise.
@@ -353,6 +355,7 @@ fn step_dwell<E: StateEstimator<N>, const N: usize>(
             id: s.id.0,
             position: [m[0], m[1]],
             velocity: [m[2], m[3]],
+            hit: s.hit,
         }
     }));
     Ok(())
@@ -463,16 +466,55 @@ fn ensure_positive_config(c: &PlotTrackConfig) -> Result<()> {
     Ok(())
 }
 
-/// Tracks as CSV: `time_s,track_id,x,y,vx,vy`, shortest round-trip numbers.
+/// Tracks as CSV: `time_s,track_id,x,y,vx,vy,hit` (hit 1 when a plot updated the track at
+/// that dwell, 0 when it coasted), shortest round-trip numbers.
 pub fn format_tracks(rows: &[TrackRow]) -> String {
-    let mut out = String::from("time_s,track_id,x,y,vx,vy\n");
+    let mut out = String::from("time_s,track_id,x,y,vx,vy,hit\n");
     for r in rows {
         out.push_str(&format!(
-            "{},{},{},{},{},{}\n",
-            r.time_s, r.id, r.position[0], r.position[1], r.velocity[0], r.velocity[1]
+            "{},{},{},{},{},{},{}\n",
+            r.time_s,
+            r.id,
+            r.position[0],
+            r.position[1],
+            r.velocity[0],
+            r.velocity[1],
+            u8::from(r.hit)
         ));
     }
     out
+}
+
+/// A rotating radar's dwells as a plot file (range-bearing, sensor 1 at the radar; σ left to
+/// the configuration) and the aircraft in view as a point truth file at the same times.
+pub fn format_radar_run(
+    radar: &crate::RotatingRadar,
+    dwells: &[crate::RadarDwell],
+    trajectories: &[crate::Trajectory],
+    truth: &[crate::TruthPoint],
+) -> (String, String) {
+    let mut plots = String::from("time_s,sensor,sensor_x,sensor_y,range,bearing\n");
+    for d in dwells {
+        for z in &d.plots {
+            plots.push_str(&format!(
+                "{},1,{},{},{},{}\n",
+                d.time_s, radar.position[0], radar.position[1], z[0], z[1]
+            ));
+        }
+    }
+    let mut points = String::from("time_s,id,x,y\n");
+    for p in truth {
+        if let Some(k) = trajectories[p.trajectory].at(p.time_s) {
+            points.push_str(&format!(
+                "{},{},{},{}\n",
+                p.time_s,
+                p.trajectory + 1,
+                k.position[0],
+                k.position[1]
+            ));
+        }
+    }
+    (plots, points)
 }
 
 /// Points of two files (`time_s`, an id column `id` or `track_id`, `x`, `y`) as track sets

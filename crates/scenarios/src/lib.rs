@@ -49,6 +49,8 @@ use serde::de::DeserializeOwned;
 
 mod fresh;
 mod pipelines;
+
+pub use pipelines::adsb_radar::export_plot_files as export_adsb_radar_plots;
 mod report;
 pub mod seeds;
 mod stats;

@@ -346,6 +346,34 @@ fn comparisons(results: &[TrackerResult]) -> Vec<Comparison> {
     ]
 }
 
+/// The scenario's radar runs as plot and truth files, for peers run outside
+/// (`docs/comparisons/stonesoup_adsb.py`): `(name, contents)` of `tune-plots.csv`,
+/// `tune-truth.csv` and `report-SEED-plots.csv`, `report-SEED-truth.csv` for each reported
+/// seed, with the data set they came from (`None`: the stand-in).
+pub fn export_plot_files(
+    params: &toml::Table,
+    seed: u64,
+    env: &Env<'_>,
+) -> Result<(Option<String>, Vec<(String, String)>)> {
+    let p = crate::typed_params::<AdsbRadar>(params)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (data, trajectories, windows) = traffic(&p, env, &mut rng)?;
+    let mut files = Vec::new();
+    let runs = std::iter::once(("tune".to_string(), p.tune_seed, (0.0, windows.split_s))).chain(
+        p.report_seeds
+            .iter()
+            .map(|&s| (format!("report-{s}"), s, (windows.split_s, windows.end_s))),
+    );
+    for (name, radar_seed, span) in runs {
+        let run = simulate(&p, &trajectories, radar_seed, span)?;
+        let (plots, truth) =
+            air_traffic::format_radar_run(&p.radar, &run.dwells, &trajectories, &run.truth);
+        files.push((format!("{name}-plots.csv"), plots));
+        files.push((format!("{name}-truth.csv"), truth));
+    }
+    Ok((data, files))
+}
+
 impl Pipeline for AdsbRadar {
     type Params = Params;
     type Output = Output;
