@@ -346,6 +346,9 @@ fn comparisons(results: &[TrackerResult]) -> Vec<Comparison> {
     ]
 }
 
+/// Files by name, with the data set they came from.
+pub type ExportedFiles = (Option<String>, Vec<(String, String)>);
+
 /// The scenario's radar runs as plot and truth files, for peers run outside
 /// (`docs/comparisons/stonesoup_adsb.py`): `(name, contents)` of `tune-plots.csv`,
 /// `tune-truth.csv` and `report-SEED-plots.csv`, `report-SEED-truth.csv` for each reported
@@ -354,7 +357,7 @@ pub fn export_plot_files(
     params: &toml::Table,
     seed: u64,
     env: &Env<'_>,
-) -> Result<(Option<String>, Vec<(String, String)>)> {
+) -> Result<ExportedFiles> {
     let p = crate::typed_params::<AdsbRadar>(params)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (data, trajectories, windows) = traffic(&p, env, &mut rng)?;
