@@ -106,8 +106,11 @@ def stonesoup_run(dwells, q, unscented):
         data_associator=GNNWith2DAssignment(hypothesiser), updater=updater, min_points=3)
     models = {}
     feed = []
+    seconds_of = {}
     for t, plots in dwells:
         stamp = EPOCH + datetime.timedelta(seconds=t)
+        # datetime keeps microseconds: the exact dwell time is written back out.
+        seconds_of[stamp] = t
         dets = set()
         for r, b, sx, sy in plots:
             model = models.get((sx, sy))
@@ -123,12 +126,12 @@ def stonesoup_run(dwells, q, unscented):
     rows, ids = ["time_s,track_id,x,y,vx,vy,hit"], {}
     start = time.perf_counter()
     for stamp, tracks in tracker:
-        t = (stamp - EPOCH).total_seconds()
+        t = seconds_of[stamp]
         for track in tracks:
             state = track.state
             if isinstance(state, Update) and state.timestamp == stamp:
                 k = ids.setdefault(track.id, len(ids) + 1)
-                x = state.state_vector.ravel()
+                x = [float(v) for v in np.asarray(state.state_vector, dtype=float).ravel()]
                 rows.append("%r,%d,%r,%r,%r,%r,1" % (t, k, x[0], x[2], x[1], x[3]))
     return "\n".join(rows) + "\n", time.perf_counter() - start
 

@@ -60,6 +60,7 @@ mod tests;
 pub use adsb::{MAX_REPORTS, ReadConfig, read_collection};
 pub use error::{Error, Result};
 pub use geodesy::EnuFrame;
+pub use mcmcda::BirthPrior;
 pub use plot_file::{
     MAX_PLOT_ROWS, PlotFilter, PlotRow, PlotTrackConfig, PlotValue, TrackRow, format_radar_run,
     format_tracks, parse_plots, point_track_sets, track_plots,
@@ -68,7 +69,7 @@ pub use radar::{MAX_DWELLS, MAX_DWELLS_PER_REVOLUTION, RadarDwell, RotatingRadar
 pub use standin::{MAX_STANDIN_AIRCRAFT, MAX_STANDIN_DURATION_S, StandinConfig};
 pub use trackers::{MotionSettings, RadarScene, RadarTracker, TrackerOutcome, run_tracker};
 pub use tracking::{
-    BirthPrior, KinematicScore, RadarRun, ScoreConfig, TruthPoint, score, track_dwells, track_set,
+    KinematicScore, RadarRun, ScoreConfig, TruthPoint, score, track_dwells, track_set,
     truth_points, truth_set,
 };
 pub use trajectory::{Kinematics, Sample, Trajectory};

@@ -25,7 +25,7 @@ use tracker_model::{
 
 use crate::error::{Error, Result};
 use crate::trackers::MotionSettings;
-use crate::tracking::BirthPrior;
+use mcmcda::BirthPrior;
 
 /// The most rows a plot or point file may have.
 pub const MAX_PLOT_ROWS: usize = 50_000_000;

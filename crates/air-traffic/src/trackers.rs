@@ -13,10 +13,9 @@ use tracker_model::{
 
 use crate::error::Result;
 use crate::radar::{RadarDwell, RotatingRadar};
-use crate::tracking::{
-    BirthPrior, KinematicScore, ScoreConfig, TruthPoint, score, track_dwells, track_set,
-};
+use crate::tracking::{KinematicScore, ScoreConfig, TruthPoint, score, track_dwells, track_set};
 use crate::trajectory::Trajectory;
+use mcmcda::BirthPrior;
 
 /// Which tracker.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]

@@ -8,60 +8,16 @@
 
 use std::collections::BTreeMap;
 
-use mcmcda::{Dwell, PlotGnn, PlotTrackState};
-use nalgebra::{SMatrix, SVector};
+use mcmcda::{BirthPrior, Dwell, PlotGnn, PlotTrackState};
+use nalgebra::SVector;
 use tracker_model::{
-    Frame, Gaussian, MeasurementModel, RangeBearing, StateEstimator, Track, TrackId, TrackPoint,
-    TrackSet, Vec2, assignment,
+    Frame, MeasurementModel, RangeBearing, StateEstimator, Track, TrackId, TrackPoint, TrackSet,
+    Vec2, assignment,
 };
 
 use crate::error::Result;
 use crate::radar::{RadarDwell, RotatingRadar};
 use crate::trajectory::Trajectory;
-
-/// How a track starts from one plot: its position converted from the plot, its velocity zero
-/// with σ `sigma_speed_m_s` per axis and, in a five-component state, its turn rate zero with σ
-/// `sigma_turn_rad_s`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BirthPrior {
-    /// σ of each velocity component, m/s.
-    pub sigma_speed_m_s: f64,
-    /// σ of the turn rate, rad/s.
-    pub sigma_turn_rad_s: f64,
-}
-
-impl BirthPrior {
-    /// The prior of a track started on plot `z` of `sensor`, state [e, n, ė, ṅ(, ω)].
-    pub fn at<const N: usize>(
-        &self,
-        sensor: &RangeBearing<N>,
-        z: &SVector<f64, 2>,
-    ) -> tracker_model::Result<Gaussian<N>> {
-        let (p, pc) = sensor.position_of(z);
-        self.around(&p, &pc)
-    }
-
-    /// The prior of a track started at a position with this covariance.
-    pub fn around<const N: usize>(
-        &self,
-        position: &SVector<f64, 2>,
-        covariance: &SMatrix<f64, 2, 2>,
-    ) -> tracker_model::Result<Gaussian<N>> {
-        let mut mean = SVector::<f64, N>::zeros();
-        let mut cov = SMatrix::<f64, N, N>::zeros();
-        mean.fixed_rows_mut::<2>(0).copy_from(position);
-        cov.fixed_view_mut::<2, 2>(0, 0).copy_from(covariance);
-        for i in 2..N {
-            let sigma = if i < 4 {
-                self.sigma_speed_m_s
-            } else {
-                self.sigma_turn_rad_s
-            };
-            cov[(i, i)] = sigma * sigma;
-        }
-        Gaussian::new(mean, cov)
-    }
-}
 
 /// The revolution a time falls in.
 fn revolution(radar: &RotatingRadar, time_s: f64) -> Frame {

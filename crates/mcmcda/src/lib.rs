@@ -23,9 +23,10 @@
 //!   [`AssignmentCost`], M-of-N confirmation and deletion after a gap, and the greedy
 //!   filter [`chain::greedy_initial_partition`] that starts the chain);
 //! * [`PlotGnn`]: GNN on radar plots in dwells with any `tracker_model::StateEstimator`
-//!   (Kalman, EKF, UKF, IMM) and any measurement model (range-bearing radars);
+//!   (Kalman, EKF, UKF, IMM) and any measurement model (range-bearing radars); [`PointGnn`]
+//!   runs it on point detections behind the one tracker interface;
 //! * the one tracker interface of tracker-model: [`OnlineTracker`] and [`JpdaTracker`] are
-//!   `tracker_model::Tracker`s, [`BatchMcmcda`] and [`Gnn`] `tracker_model::BatchTracker`s;
+//!   `tracker_model::Tracker`s (and [`PointGnn`]), [`BatchMcmcda`] and [`Gnn`] `tracker_model::BatchTracker`s;
 //! * [`smoothed_tracks`], [`measurement_labels`], [`tracks_by_origin`]: from partitions to
 //!   trajectories and scores;
 //! * [`mod@reference`]: the log posterior from per-scan counts and partition enumeration.
@@ -82,7 +83,10 @@ pub use nearest::{Assignment, AssignmentCost, NearestNeighbourConfig, nearest_ne
 pub use online::{
     CommittedPiece, MAX_WINDOW, OnlineConfig, OnlineResult, OnlineStep, OnlineTracker,
 };
-pub use plots::{Dwell, MAX_DWELL_PLOTS, MAX_PLOT_TRACKS, PlotGnn, PlotGnnConfig, PlotTrackState};
+pub use plots::{
+    BirthPrior, Dwell, MAX_DWELL_PLOTS, MAX_PLOT_TRACKS, PlotGnn, PlotGnnConfig, PlotTrackState,
+    PointGnn,
+};
 pub use problem::{MeasId, Problem};
 pub use sampler::{McmcdaRun, MoveStats};
 

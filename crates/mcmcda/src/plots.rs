@@ -12,11 +12,14 @@
 //! their first `confirm_window` dwells in view, and are deleted after `max_misses` misses
 //! in a row.
 
-use nalgebra::SVector;
+use std::collections::BTreeMap;
+
+use nalgebra::{Matrix2, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 use tracker_model::{
-    Error as ModelError, Gaussian, MeasurementModel, MeasurementPrediction, StateEstimator,
-    TrackId, assignment, ensure_positive,
+    Detection, Error as ModelError, Frame, Gaussian, LinearObservation, MeasurementModel,
+    MeasurementPrediction, RangeBearing, StateEstimator, Track, TrackId, TrackPoint, TrackSet,
+    TrackState, Tracker, Vec2, assignment, ensure_positive,
 };
 
 use crate::error::Result;
@@ -349,5 +352,138 @@ impl<E: StateEstimator<N>, const N: usize> PlotGnn<E, N> {
             });
         }
         Ok(())
+    }
+}
+
+/// How a track starts from one plot: its position converted from the plot, its velocity zero
+/// with σ `sigma_speed_m_s` per axis and, in a five-component state, its turn rate zero with σ
+/// `sigma_turn_rad_s`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BirthPrior {
+    /// σ of each velocity component, m/s.
+    pub sigma_speed_m_s: f64,
+    /// σ of the turn rate, rad/s.
+    pub sigma_turn_rad_s: f64,
+}
+
+impl BirthPrior {
+    /// The prior of a track started on plot `z` of `sensor`, state [e, n, ė, ṅ(, ω)].
+    pub fn at<const N: usize>(
+        &self,
+        sensor: &RangeBearing<N>,
+        z: &SVector<f64, 2>,
+    ) -> tracker_model::Result<Gaussian<N>> {
+        let (p, pc) = sensor.position_of(z);
+        self.around(&p, &pc)
+    }
+
+    /// The prior of a track started at a position with this covariance.
+    pub fn around<const N: usize>(
+        &self,
+        position: &SVector<f64, 2>,
+        covariance: &SMatrix<f64, 2, 2>,
+    ) -> tracker_model::Result<Gaussian<N>> {
+        let mut mean = SVector::<f64, N>::zeros();
+        let mut cov = SMatrix::<f64, N, N>::zeros();
+        mean.fixed_rows_mut::<2>(0).copy_from(position);
+        cov.fixed_view_mut::<2, 2>(0, 0).copy_from(covariance);
+        for i in 2..N {
+            let sigma = if i < 4 {
+                self.sigma_speed_m_s
+            } else {
+                self.sigma_turn_rad_s
+            };
+            cov[(i, i)] = sigma * sigma;
+        }
+        Gaussian::new(mean, cov)
+    }
+}
+
+/// Detections that share a covariance: it, and their positions.
+type Group = (Matrix2<f64>, Vec<SVector<f64, 2>>);
+
+/// [`PlotGnn`] behind the one tracker interface, on point [`Detection`]s in the plane: each
+/// frame is a dwell that sees everything, `frame_s` seconds after the last; a detection's
+/// covariance (else `position_covariance`) is its noise, and detections with the same
+/// covariance share a dwell. With any estimator: KF, EKF, UKF or an IMM.
+pub struct PointGnn<E: StateEstimator<N>, const N: usize> {
+    gnn: PlotGnn<E, N>,
+    frame_s: f64,
+    position_covariance: Matrix2<f64>,
+    birth: BirthPrior,
+    tracks: BTreeMap<TrackId, Vec<TrackPoint>>,
+}
+
+impl<E: StateEstimator<N>, const N: usize> PointGnn<E, N> {
+    /// A tracker on frames `frame_s` seconds apart.
+    pub fn new(
+        gnn: PlotGnn<E, N>,
+        frame_s: f64,
+        position_covariance: Matrix2<f64>,
+        birth: BirthPrior,
+    ) -> Result<Self> {
+        ensure_positive(frame_s, "frame_s")?;
+        tracker_model::CholeskyFactor::new(&position_covariance, "position_covariance")?;
+        Ok(Self {
+            gnn,
+            frame_s,
+            position_covariance,
+            birth,
+            tracks: BTreeMap::new(),
+        })
+    }
+}
+
+impl<E: StateEstimator<N>, const N: usize> Tracker for PointGnn<E, N> {
+    type Error = crate::Error;
+
+    fn step(&mut self, frame: Frame, detections: &[Detection]) -> Result<Vec<TrackState>> {
+        let time_s = f64::from(frame) * self.frame_s;
+        // Detections by their covariance's bits: one dwell each.
+        let mut groups: BTreeMap<[u64; 4], Group> = BTreeMap::new();
+        for d in detections {
+            let r = d.covariance.unwrap_or(self.position_covariance);
+            let p = d.position();
+            let key = [r[(0, 0)], r[(0, 1)], r[(1, 0)], r[(1, 1)]].map(f64::to_bits);
+            groups
+                .entry(key)
+                .or_insert_with(|| (r, Vec::new()))
+                .1
+                .push(SVector::<f64, 2>::new(p.x, p.y));
+        }
+        if groups.is_empty() {
+            groups.insert([0; 4], (self.position_covariance, Vec::new()));
+        }
+        let mut out = Vec::new();
+        for (r, plots) in groups.values() {
+            let sensor = LinearObservation::<N, 2>::leading_components(*r)?;
+            let birth = self.birth;
+            let dwell = Dwell {
+                time_s,
+                sensor: &sensor,
+                plots,
+                in_view: &|_| true,
+                birth: &|z| birth.around::<N>(z, r),
+            };
+            for s in self.gnn.step(&dwell)? {
+                let m = s.estimate.mean();
+                let point = TrackPoint::at(frame, Vec2::new(m[0], m[1]));
+                let track = self.tracks.entry(s.id).or_default();
+                if track.last().is_none_or(|p| p.frame < frame) {
+                    track.push(point);
+                    out.push(TrackState { id: s.id, point });
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    fn finish(&mut self) -> Result<TrackSet> {
+        let tracks = std::mem::take(&mut self.tracks)
+            .into_iter()
+            .map(|(id, points)| Track::from_points(id, points))
+            .collect::<tracker_model::Result<Vec<_>>>()?;
+        Ok(TrackSet::from_tracks(tracks)?)
     }
 }

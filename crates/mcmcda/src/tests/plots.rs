@@ -321,3 +321,61 @@ fn bad_dwells_and_settings_are_errors() {
         assert!(PlotGnn::new(kalman(1.0), bad).is_err(), "{bad:?}");
     }
 }
+
+/// PointGnn behind the one interface: the turning aircraft as point detections each frame
+/// (5 s apart, σ 30 m), through the IMM and through a CV Kalman filter, as the `Tracker` trait
+/// drives them; the IMM keeps one track from confirmation to the end.
+#[test]
+fn point_gnn_runs_any_estimator_behind_the_tracker_interface() {
+    use rand_distr::StandardNormal;
+    use tracker_model::{Detection, Tracker, Vec2};
+    let path = turning_path(30);
+    let mut rng = ChaCha8Rng::seed_from_u64(9);
+    let frames: Vec<Vec<Detection>> = path
+        .iter()
+        .enumerate()
+        .map(|(k, p)| {
+            let p = p.unwrap();
+            let n: [f64; 2] = [
+                StandardNormal.sample(&mut rng),
+                StandardNormal.sample(&mut rng),
+            ];
+            vec![Detection::point(
+                k as u64,
+                k as u32,
+                Vec2::new(p.x + 30.0 * n[0], p.y + 30.0 * n[1]),
+            )]
+        })
+        .collect();
+    let birth = crate::BirthPrior {
+        sigma_speed_m_s: 300.0,
+        sigma_turn_rad_s: 0.03,
+    };
+    let r = nalgebra::Matrix2::identity() * 900.0;
+    // Position plots: the clutter density is per square metre (one false alarm per 100 km²).
+    let config = || PlotGnnConfig {
+        clutter_log_density: (1e-10f64).ln(),
+        ..config()
+    };
+    let mut imm_tracker =
+        crate::PointGnn::new(PlotGnn::new(imm(), config()).unwrap(), SCAN_S, r, birth).unwrap();
+    for (k, dets) in frames.iter().enumerate() {
+        let states = imm_tracker.step(k as u32, dets).unwrap();
+        assert_eq!(states.len(), usize::from(k >= 2), "frame {k}");
+    }
+    let set = imm_tracker.finish().unwrap();
+    assert_eq!(set.tracks().len(), 1);
+    assert_eq!(set.tracks()[0].points().len(), 28);
+    let mut kf = crate::PointGnn::new(
+        PlotGnn::new(kalman(100.0), config()).unwrap(),
+        SCAN_S,
+        r,
+        birth,
+    )
+    .unwrap();
+    for (k, dets) in frames.iter().enumerate() {
+        kf.step(k as u32, dets).unwrap();
+    }
+    assert!(!kf.finish().unwrap().tracks().is_empty());
+    assert!(crate::PointGnn::new(PlotGnn::new(imm(), config()).unwrap(), 0.0, r, birth).is_err());
+}

@@ -353,11 +353,7 @@ pub type ExportedFiles = (Option<String>, Vec<(String, String)>);
 /// (`docs/comparisons/stonesoup_adsb.py`): `(name, contents)` of `tune-plots.csv`,
 /// `tune-truth.csv` and `report-SEED-plots.csv`, `report-SEED-truth.csv` for each reported
 /// seed, with the data set they came from (`None`: the stand-in).
-pub fn export_plot_files(
-    params: &toml::Table,
-    seed: u64,
-    env: &Env<'_>,
-) -> Result<ExportedFiles> {
+pub fn export_plot_files(params: &toml::Table, seed: u64, env: &Env<'_>) -> Result<ExportedFiles> {
     let p = crate::typed_params::<AdsbRadar>(params)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let (data, trajectories, windows) = traffic(&p, env, &mut rng)?;
