@@ -4,9 +4,10 @@ ours (`cargo xtask track --plots`), each tuned on the same tuning run and scored
 evaluator (`cargo xtask eval --distance`), with the time per scan.
 
     cargo xtask export-plots --out /tmp/adsb-plots      # the real collection when fetched
-    python3 docs/comparisons/stonesoup_adsb.py /tmp/adsb-plots [SEED,SEED,... [SECONDS]]
+    python3 docs/comparisons/stonesoup_adsb.py /tmp/adsb-plots [SEED,SEED,... [SECONDS [WHICH]]]
 
-SECONDS keeps only the first SECONDS of each run (tuning and reported), for both sides: Stone
+WHICH is all (the default), stonesoup or ours: one side only. SECONDS keeps only the first
+SECONDS of each run (tuning and reported), for both sides: Stone
 Soup takes about 0.1 s a dwell on the stand-in, so its whole runs take hours.
 
 Protocol (the same for both sides):
@@ -19,7 +20,8 @@ Protocol (the same for both sides):
   track is predicted and missed at every dwell, which costs time and nothing else.
 - Ours: `--filter ekf`, `ukf` (the coordinated turn with ω in the state) and `imm` (CV and
   ±3°/s), their other settings `PlotTrackConfig::default()`'s, the clutter density the
-  scenario's.
+  scenario's. The plot files carry each dwell's sector (`beam_rad`, `beam_width_rad`), so ours
+  predicts and misses a track only where the beam looked; Stone Soup reads past them.
 - q (white-acceleration density, the same for each axis) is chosen from one grid (0.3, 3, 30:
   three values, because Stone Soup is slow) by mean OSPA
   on the tuning run, for every tracker. The reported runs are scored with q fixed.
@@ -171,7 +173,7 @@ def truncate(folder, name, seconds):
     return short
 
 
-def main(folder, seeds, seconds):
+def main(folder, seeds, seconds, which):
     trackers = [("Stone Soup GNN + EKF (CV)", "ss", False), ("Stone Soup GNN + UKF (CV)", "ss", True),
                 ("ours GNN + EKF (CT, ω in state)", "ekf", None), ("ours GNN + UKF (CT, ω in state)", "ukf", None),
                 ("ours GNN + IMM CV/CT±3°/s", "imm", None)]
@@ -180,6 +182,8 @@ def main(folder, seeds, seconds):
     tune = truncate(folder, "tune", seconds)
     reported = [truncate(folder, "report-%s" % s, seconds) for s in seeds]
     for name, kind, flag in trackers:
+        if which != "all" and (kind == "ss") != (which == "stonesoup"):
+            continue
         grid = []
         for q in Q_GRID:
             out = "%s/%s-%s-%s-%g.csv" % (folder, tune, kind, flag, q)
@@ -217,4 +221,5 @@ if __name__ == "__main__":
     folder = sys.argv[1]
     seeds = sys.argv[2].split(",") if len(sys.argv) > 2 else ["7202", "7203", "7204", "7205", "7206"]
     seconds = float(sys.argv[3]) if len(sys.argv) > 3 else None
-    main(folder, seeds, seconds)
+    which = sys.argv[4] if len(sys.argv) > 4 else "all"
+    main(folder, seeds, seconds, which)

@@ -6,7 +6,10 @@
 //! - either `x`, `y` (a position, metres) or `range`, `bearing` (metres; radians
 //!   counter-clockwise from the x axis);
 //! - optionally the plot's noise: `sigma_x`, `sigma_y` or `sigma_range`, `sigma_bearing`;
-//!   without them, the configuration's.
+//!   without them, the configuration's;
+//! - optionally the sector the sensor looked at, `beam_rad` and `beam_width_rad` (a rotating
+//!   radar's dwell): a track outside it is neither predicted nor missed there. Without them
+//!   a dwell sees everything within `max_range_m`, so a sector-by-sector radar needs them.
 //!
 //! Plots with the same time, sensor and noise form one dwell. Every sensor is taken to see
 //! everything within `max_range_m`. Tracks (`time_s,track_id,x,y,vx,vy,hit`) are written at
@@ -15,7 +18,7 @@
 
 use std::collections::BTreeMap;
 
-use mcmcda::{Dwell, PlotGnn, PlotGnnConfig};
+use mcmcda::{Dwell, PlotGnn, PlotGnnConfig, View};
 use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 use tracker_model::{
@@ -52,6 +55,8 @@ pub struct PlotRow {
     pub value: PlotValue,
     /// Its standard deviations (σ_x, σ_y or σ_range, σ_bearing), if given.
     pub sigma: Option<[f64; 2]>,
+    /// The sector looked at: its centre bearing and its width, radians, if given.
+    pub beam: Option<[f64; 2]>,
 }
 
 /// Column positions found in a header.
@@ -153,12 +158,18 @@ pub fn parse_plots(text: &str) -> Result<Vec<PlotRow>> {
         } else {
             None
         };
+        let beam = if cols.has("beam_rad") && cols.has("beam_width_rad") {
+            Some([n("beam_rad")?, n("beam_width_rad")?])
+        } else {
+            None
+        };
         out.push(PlotRow {
             time_s: n("time_s")?,
             sensor: sensor as u32,
             sensor_position: [n("sensor_x")?, n("sensor_y")?],
             value: pair,
             sigma,
+            beam,
         });
     }
     out.sort_by(|a, b| a.time_s.total_cmp(&b.time_s));
@@ -214,6 +225,9 @@ pub struct PlotTrackConfig {
     pub sigma_bearing_rad: f64,
     /// A sensor sees every target within this range, metres.
     pub max_range_m: f64,
+    /// With sector columns: a track predicted within this many radians of a sector's border
+    /// may take a plot there but is not missed there (`mcmcda::View::Edge`); 0 by default.
+    pub edge_margin_rad: f64,
     /// ln λ, false alarms per unit measurement volume (m² for positions, m·rad for
     /// range-bearing).
     pub clutter_log_density: f64,
@@ -244,6 +258,7 @@ impl Default for PlotTrackConfig {
             sigma_range_m: 50.0,
             sigma_bearing_rad: 0.0015,
             max_range_m: 150_000.0,
+            edge_margin_rad: 0.0,
             clutter_log_density: (50.0f64 / (150_000.0 * std::f64::consts::TAU)).ln(),
             gate_chi2: 16.0,
             confirm_hits: 3,
@@ -308,15 +323,36 @@ fn value(row: &PlotRow) -> SVector<f64, 2> {
     }
 }
 
-/// A dwell's key: time, sensor, kind and noise, compared by their bits.
-fn dwell_key(row: &PlotRow) -> (u64, u32, bool, [u64; 2]) {
-    let sigma = row.sigma.map_or([0, 0], |s| s.map(f64::to_bits));
+/// A dwell's key: time, sensor, kind, noise and sector, compared by their bits.
+fn dwell_key(row: &PlotRow) -> (u64, u32, bool, [u64; 2], [u64; 2]) {
+    let bits = |v: Option<[f64; 2]>| v.map_or([0, 0], |s| s.map(f64::to_bits));
     (
         row.time_s.to_bits(),
         row.sensor,
         matches!(row.value, PlotValue::Position(_)),
-        sigma,
+        bits(row.sigma),
+        bits(row.beam),
     )
+}
+
+/// How a track predicted at `bearing` and `range` sees the row's dwell: beyond `max_range`,
+/// out; in the sector (every bearing when the row names none), in; within `margin` of its
+/// border, at the edge (`mcmcda::View`).
+fn view_of(row: &PlotRow, range: f64, bearing: f64, max_range: f64, margin: f64) -> View {
+    if range > max_range {
+        return View::Out;
+    }
+    let Some([centre, width]) = row.beam else {
+        return View::In;
+    };
+    let off = tracker_model::wrap_angle_rad(bearing - centre).abs() - 0.5 * width;
+    if off > margin {
+        View::Out
+    } else if off > -margin {
+        View::Edge
+    } else {
+        View::In
+    }
 }
 
 /// One dwell through `gnn`.
@@ -336,14 +372,31 @@ fn step_dwell<E: StateEstimator<N>, const N: usize>(
     let states = match Sensor::<N>::of(first, config)? {
         Sensor::Position(sensor) => {
             let r = MeasurementModel::<N, 2>::noise(&sensor);
+            let margin = 5.0 * (r[(0, 0)].max(r[(1, 1)])).sqrt();
             let in_view = |z: &SVector<f64, 2>| {
-                (z[0] - centre[0]).hypot(z[1] - centre[1]) <= config.max_range_m
+                let (dx, dy) = (z[0] - centre[0], z[1] - centre[1]);
+                let range = dx.hypot(dy);
+                view_of(
+                    first,
+                    range,
+                    dy.atan2(dx),
+                    config.max_range_m,
+                    margin / range.max(1.0),
+                )
             };
             let start = |z: &SVector<f64, 2>| birth.around::<N>(z, &r);
             step_with(gnn, first.time_s, &sensor, &plots, &in_view, &start)?
         }
         Sensor::Polar(sensor) => {
-            let in_view = |z: &SVector<f64, 2>| z[0] <= config.max_range_m;
+            let in_view = |z: &SVector<f64, 2>| {
+                view_of(
+                    first,
+                    z[0],
+                    z[1],
+                    config.max_range_m,
+                    config.edge_margin_rad,
+                )
+            };
             let start = |z: &SVector<f64, 2>| birth.at(&sensor, z);
             step_with(gnn, first.time_s, &sensor, &plots, &in_view, &start)?
         }
@@ -367,7 +420,7 @@ fn step_with<E: StateEstimator<N>, O: MeasurementModel<N, 2>, const N: usize>(
     time_s: f64,
     sensor: &O,
     plots: &[SVector<f64, 2>],
-    in_view: &dyn Fn(&SVector<f64, 2>) -> bool,
+    in_view: &dyn Fn(&SVector<f64, 2>) -> View,
     birth: &dyn Fn(&SVector<f64, 2>) -> tracker_model::Result<Gaussian<N>>,
 ) -> Result<Vec<mcmcda::PlotTrackState<N>>> {
     Ok(gnn.step(&Dwell {
@@ -447,6 +500,7 @@ fn ensure_positive_config(c: &PlotTrackConfig) -> Result<()> {
     use tracker_model::{ensure_in_range, ensure_non_negative, ensure_positive};
     ensure_non_negative(c.q_accel, "q_accel")?;
     ensure_non_negative(c.q_turn, "q_turn")?;
+    ensure_non_negative(c.edge_margin_rad, "edge_margin_rad")?;
     ensure_in_range(
         c.imm_turn_rate_deg_s,
         0.0,
@@ -485,20 +539,22 @@ pub fn format_tracks(rows: &[TrackRow]) -> String {
     out
 }
 
-/// A rotating radar's dwells as a plot file (range-bearing, sensor 1 at the radar; σ left to
-/// the configuration) and the aircraft in view as a point truth file at the same times.
+/// A rotating radar's dwells as a plot file (range-bearing with each dwell's sector, sensor 1
+/// at the radar; σ left to the configuration; a dwell without plots is not written) and the aircraft in view as a point truth file at the same times.
 pub fn format_radar_run(
     radar: &crate::RotatingRadar,
     dwells: &[crate::RadarDwell],
     trajectories: &[crate::Trajectory],
     truth: &[crate::TruthPoint],
 ) -> (String, String) {
-    let mut plots = String::from("time_s,sensor,sensor_x,sensor_y,range,bearing\n");
+    let mut plots =
+        String::from("time_s,sensor,sensor_x,sensor_y,range,bearing,beam_rad,beam_width_rad\n");
+    let width = radar.beam_width_rad();
     for d in dwells {
         for z in &d.plots {
             plots.push_str(&format!(
-                "{},1,{},{},{},{}\n",
-                d.time_s, radar.position[0], radar.position[1], z[0], z[1]
+                "{},1,{},{},{},{},{},{width}\n",
+                d.time_s, radar.position[0], radar.position[1], z[0], z[1], d.beam_rad
             ));
         }
     }

@@ -117,6 +117,20 @@ impl RotatingRadar {
             && wrap_angle_rad(z[1] - beam_rad).abs() <= 0.5 * self.beam_width_rad()
     }
 
+    /// How a tracker sees [range, bearing] from the dwell at `beam_rad`: outside the range or
+    /// farther than `margin_rad` outside the sector, out; within `margin_rad` of its border,
+    /// at the edge; else in.
+    pub fn view(&self, beam_rad: f64, margin_rad: f64, z: &SVector<f64, 2>) -> mcmcda::View {
+        let off = wrap_angle_rad(z[1] - beam_rad).abs() - 0.5 * self.beam_width_rad();
+        if !(self.min_range_m..=self.max_range_m).contains(&z[0]) || off > margin_rad {
+            mcmcda::View::Out
+        } else if off > -margin_rad {
+            mcmcda::View::Edge
+        } else {
+            mcmcda::View::In
+        }
+    }
+
     /// Every dwell from `start_s` to `end_s` over `trajectories`.
     pub fn simulate<R: Rng + ?Sized>(
         &self,

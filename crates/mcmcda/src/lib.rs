@@ -85,7 +85,7 @@ pub use online::{
 };
 pub use plots::{
     BirthPrior, Dwell, MAX_DWELL_PLOTS, MAX_PLOT_TRACKS, PlotGnn, PlotGnnConfig, PlotTrackState,
-    PointGnn,
+    PointGnn, View,
 };
 pub use problem::{MeasId, Problem};
 pub use sampler::{McmcdaRun, MoveStats};

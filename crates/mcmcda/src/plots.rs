@@ -4,7 +4,9 @@
 //!
 //! Plots come in dwells: the plots a sensor reports at one time over the part of its coverage
 //! it looked at (a rotating radar's beam sector). A track is predicted and may miss only when
-//! it is in view, so a sensor that sees a sector at a time never counts misses elsewhere.
+//! it is in view, so a sensor that sees a sector at a time never counts misses elsewhere; a
+//! track at a sector's edge may take a plot there but is not missed there ([`View::Edge`]),
+//! because its plot may fall in the neighbouring dwell.
 //! Each dwell is one optimal assignment of the tracks in view to the plots, weighted by the
 //! log-likelihood ratio of target against clutter, ln p(z | track) − ln λ (Blackman &
 //! Popoli 1999, §6.3, the GNN score); pairs outside the χ² gate or below zero are not made.
@@ -87,6 +89,18 @@ fn invalid(name: &'static str, reason: String) -> crate::Error {
     crate::Error::Model(ModelError::InvalidParameter { name, reason })
 }
 
+/// Where a track's predicted measurement falls against what a dwell looked at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum View {
+    /// Outside: the track is left alone.
+    Out,
+    /// At the edge (within the prediction's error of the border): the track may take a plot,
+    /// but a dwell without one is no miss, since the neighbouring dwell may hold its plot.
+    Edge,
+    /// Inside: the track takes a plot or misses.
+    In,
+}
+
 /// One dwell of one sensor.
 pub struct Dwell<'a, O: ?Sized, const N: usize, const M: usize> {
     /// When, in seconds; dwells come in order of time.
@@ -95,8 +109,8 @@ pub struct Dwell<'a, O: ?Sized, const N: usize, const M: usize> {
     pub sensor: &'a O,
     /// The plots.
     pub plots: &'a [SVector<f64, M>],
-    /// Whether a predicted measurement is in the part of the coverage looked at.
-    pub in_view: &'a dyn Fn(&SVector<f64, M>) -> bool,
+    /// Where a predicted measurement falls against the part of the coverage looked at.
+    pub in_view: &'a dyn Fn(&SVector<f64, M>) -> View,
     /// The state of a new target from its first plot.
     pub birth: &'a dyn Fn(&SVector<f64, M>) -> tracker_model::Result<Gaussian<N>>,
 }
@@ -140,6 +154,7 @@ struct InView<B, const M: usize> {
     index: usize,
     predicted: B,
     zhat: MeasurementPrediction<M>,
+    view: View,
 }
 
 impl<E: StateEstimator<N>, const N: usize> PlotGnn<E, N> {
@@ -181,6 +196,9 @@ impl<E: StateEstimator<N>, const N: usize> PlotGnn<E, N> {
         let mut taken = vec![false; dwell.plots.len()];
         let mut out = Vec::new();
         for (k, view) in in_view.into_iter().enumerate() {
+            if pairs[k].is_none() && view.view == View::Edge {
+                continue;
+            }
             let track = &mut self.tracks[view.index];
             track.chances += 1;
             track.time_s = dwell.time_s;
@@ -260,11 +278,13 @@ impl<E: StateEstimator<N>, const N: usize> PlotGnn<E, N> {
             let zhat = self
                 .estimator
                 .predict_measurement(dwell.sensor, &predicted)?;
-            if (dwell.in_view)(zhat.mean()) {
+            let view = (dwell.in_view)(zhat.mean());
+            if view != View::Out {
                 in_view.push(InView {
                     index,
                     predicted,
                     zhat,
+                    view,
                 });
             }
         }
@@ -463,7 +483,7 @@ impl<E: StateEstimator<N>, const N: usize> Tracker for PointGnn<E, N> {
                 time_s,
                 sensor: &sensor,
                 plots,
-                in_view: &|_| true,
+                in_view: &|_| View::In,
                 birth: &|z| birth.around::<N>(z, r),
             };
             for s in self.gnn.step(&dwell)? {

@@ -10,7 +10,7 @@ use tracker_model::{
     SingleModel, StateEstimator, TrackId,
 };
 
-use crate::{Dwell, PlotGnn, PlotGnnConfig, PlotTrackState};
+use crate::{Dwell, PlotGnn, PlotGnnConfig, PlotTrackState, View};
 
 const SCAN_S: f64 = 5.0;
 
@@ -80,7 +80,7 @@ fn run<E: StateEstimator<4>>(
             time_s: k as f64 * SCAN_S,
             sensor: radar,
             plots: &plots,
-            in_view: &|_| true,
+            in_view: &|_| View::In,
             birth: &|z| birth(radar, z),
         };
         out.push(tracker.step(&dwell).unwrap());
@@ -255,7 +255,7 @@ fn tracks_out_of_view_are_left_alone() {
             time_s: k as f64 * SCAN_S,
             sensor: &r,
             plots: &[],
-            in_view: &|_| false,
+            in_view: &|_| View::Out,
             birth: &|z| birth(&r, z),
         };
         assert!(gnn.step(&dwell).unwrap().is_empty());
@@ -265,7 +265,7 @@ fn tracks_out_of_view_are_left_alone() {
         time_s: 20.0 * SCAN_S,
         sensor: &r,
         plots: &[],
-        in_view: &|_| true,
+        in_view: &|_| View::In,
         birth: &|z| birth(&r, z),
     };
     let seen = gnn.step(&back).unwrap();
@@ -278,7 +278,7 @@ fn tracks_out_of_view_are_left_alone() {
 fn bad_dwells_and_settings_are_errors() {
     let r = radar();
     let mut gnn = PlotGnn::new(kalman(1.0), config()).unwrap();
-    let view = |_: &SVector<f64, 2>| true;
+    let view = |_: &SVector<f64, 2>| View::In;
     let start = |z: &SVector<f64, 2>| birth(&r, z);
     let mut step_at = |t: f64| {
         gnn.step(&Dwell {
@@ -378,4 +378,43 @@ fn point_gnn_runs_any_estimator_behind_the_tracker_interface() {
     }
     assert!(!kf.finish().unwrap().tracks().is_empty());
     assert!(crate::PointGnn::new(PlotGnn::new(imm(), config()).unwrap(), 0.0, r, birth).is_err());
+}
+
+/// A track at a sector's edge without a plot is not missed: ten edge dwells leave it, three
+/// inside dwells without a plot delete it.
+#[test]
+fn edge_dwells_count_no_miss() {
+    let paths = [straight(
+        Vector2::new(5000.0, 5000.0),
+        Vector2::new(100.0, 0.0),
+        6,
+    )];
+    let r = radar();
+    let start = |z: &SVector<f64, 2>| birth(&r, z);
+    let edge = |_: &SVector<f64, 2>| View::Edge;
+    let inside = |_: &SVector<f64, 2>| View::In;
+    let mut gnn = PlotGnn::new(kalman(1.0), config()).unwrap();
+    run(&mut gnn, &r, &paths, 0, 3);
+    for k in 6..16u32 {
+        let d = Dwell {
+            time_s: f64::from(k) * SCAN_S,
+            sensor: &r,
+            plots: &[],
+            in_view: &edge,
+            birth: &start,
+        };
+        assert!(gnn.step(&d).unwrap().is_empty());
+    }
+    assert_eq!(gnn.track_count(), 1);
+    for k in 16..19u32 {
+        let d = Dwell {
+            time_s: f64::from(k) * SCAN_S,
+            sensor: &r,
+            plots: &[],
+            in_view: &inside,
+            birth: &start,
+        };
+        gnn.step(&d).unwrap();
+    }
+    assert_eq!(gnn.track_count(), 0);
 }
