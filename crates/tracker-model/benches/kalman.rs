@@ -73,10 +73,33 @@ fn reference_scans() -> (Vec<(f64, nalgebra::Vector2<f64>)>, serde_json::Value) 
     (times.zip(zs).collect(), doc)
 }
 
+/// The three-mode IMM of the reference (CV, CT ±ω₀, EKF) with its start probabilities.
+fn reference_imm(doc: &serde_json::Value) -> tracker_model::Imm<4> {
+    use tracker_model::{CoordinatedTurn, GaussianFilter, Imm, Mode};
+    let num = |v: &serde_json::Value| v.as_f64().unwrap();
+    let w = num(&doc["turns"][0]["turn_rate_rad_s"]);
+    let q = num(&doc["cv"]["q"]);
+    let modes: Vec<Mode<4>> = vec![
+        Box::new(ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q }).unwrap()),
+        Box::new(CoordinatedTurn::new(w, q).unwrap()),
+        Box::new(CoordinatedTurn::new(-w, q).unwrap()),
+    ];
+    let switching: Vec<Vec<f64>> = doc["switching_cv_ct"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r.as_array().unwrap().iter().map(num).collect())
+        .collect();
+    Imm::new(modes, &switching, GaussianFilter::Extended)
+        .unwrap()
+        .with_start_probabilities(&[0.8, 0.1, 0.1])
+        .unwrap()
+}
+
 fn bench_nonlinear(c: &mut Criterion) {
     use tracker_model::{
-        CoordinatedTurn, CoordinatedTurnRate, GaussianFilter, Imm, Mode, RangeBearing, SigmaPoints,
-        SingleModel, StateEstimator, TurnNoise,
+        CoordinatedTurnRate, GaussianFilter, RangeBearing, SigmaPoints, SingleModel,
+        StateEstimator, TurnNoise,
     };
     let (scans, doc) = reference_scans();
     let num = |v: &serde_json::Value| v.as_f64().unwrap();
@@ -137,23 +160,7 @@ fn bench_nonlinear(c: &mut Criterion) {
     c.bench_function("ukf_turn_rate_43_scans", |b| {
         b.iter(|| run(&ukf, &rb5, black_box(&prior5), &scans))
     });
-    let w = num(&doc["turns"][0]["turn_rate_rad_s"]);
-    let q = num(&doc["cv"]["q"]);
-    let modes: Vec<Mode<4>> = vec![
-        Box::new(ConstantVelocity2::new(1.0, CvNoise::WhiteAcceleration { q }).unwrap()),
-        Box::new(CoordinatedTurn::new(w, q).unwrap()),
-        Box::new(CoordinatedTurn::new(-w, q).unwrap()),
-    ];
-    let switching: Vec<Vec<f64>> = doc["switching_cv_ct"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|r| r.as_array().unwrap().iter().map(num).collect())
-        .collect();
-    let imm = Imm::new(modes, &switching, GaussianFilter::Extended)
-        .unwrap()
-        .with_start_probabilities(&[0.8, 0.1, 0.1])
-        .unwrap();
+    let imm = reference_imm(&doc);
     c.bench_function("imm_ekf_cv_ct_43_scans", |b| {
         b.iter(|| run(&imm, &rb4, black_box(&prior4), &scans))
     });
