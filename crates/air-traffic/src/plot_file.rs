@@ -23,7 +23,7 @@ use nalgebra::{SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 use tracker_model::{
     Error as ModelError, Gaussian, LinearObservation, MeasurementModel, RadarSite, RangeBearing,
-    SigmaPoints, StateEstimator, Track, TrackId, TrackPoint, TrackSet, Vec2,
+    SigmaPoints, StateEstimator, TrackId, TrackPoint, TrackSet, Vec2,
 };
 
 use crate::error::{Error, Result};
@@ -339,19 +339,10 @@ fn dwell_key(row: &PlotRow) -> (u64, u32, bool, [u64; 2], [u64; 2]) {
 /// out; in the sector (every bearing when the row names none), in; within `margin` of its
 /// border, at the edge (`mcmcda::View`).
 fn view_of(row: &PlotRow, range: f64, bearing: f64, max_range: f64, margin: f64) -> View {
-    if range > max_range {
-        return View::Out;
-    }
-    let Some([centre, width]) = row.beam else {
-        return View::In;
-    };
-    let off = tracker_model::wrap_angle_rad(bearing - centre).abs() - 0.5 * width;
-    if off > margin {
-        View::Out
-    } else if off > -margin {
-        View::Edge
-    } else {
-        View::In
+    match row.beam {
+        _ if range > max_range => View::Out,
+        None => View::In,
+        Some([centre, width]) => crate::radar::sector_view(bearing, centre, width, margin),
     }
 }
 
@@ -594,14 +585,11 @@ pub fn point_track_sets(truth: &str, estimates: &str) -> Result<(TrackSet, Track
                 .or_default()
                 .push(TrackPoint::at(frame_of(*t), Vec2::new(p[0], p[1])));
         }
-        let tracks = by_id
-            .into_iter()
-            .map(|(id, mut pts)| {
-                pts.sort_by_key(|p| p.frame);
-                Track::from_points(TrackId(id), pts)
-            })
-            .collect::<tracker_model::Result<Vec<_>>>()?;
-        Ok(TrackSet::from_tracks(tracks)?)
+        let lists = by_id.into_iter().map(|(id, mut pts)| {
+            pts.sort_by_key(|p| p.frame);
+            (TrackId(id), pts)
+        });
+        Ok(TrackSet::from_point_lists(lists)?)
     };
     Ok((build(&a)?, build(&b)?))
 }

@@ -5,6 +5,7 @@
 //! `p_detect`, its plot its true ground range and bearing at the dwell's time plus Gaussian
 //! noise; clutter is Poisson, uniform in range and bearing over the sector.
 
+use mcmcda::View;
 use nalgebra::SVector;
 use rand::{Rng, RngExt};
 use rand_distr::{Distribution, Normal, Poisson};
@@ -113,21 +114,16 @@ impl RotatingRadar {
 
     /// Whether [range, bearing] is in range and in the dwell's sector.
     pub fn in_view(&self, beam_rad: f64, z: &SVector<f64, 2>) -> bool {
-        (self.min_range_m..=self.max_range_m).contains(&z[0])
-            && wrap_angle_rad(z[1] - beam_rad).abs() <= 0.5 * self.beam_width_rad()
+        self.view(beam_rad, 0.0, z) == View::In
     }
 
-    /// How a tracker sees [range, bearing] from the dwell at `beam_rad`: outside the range or
-    /// farther than `margin_rad` outside the sector, out; within `margin_rad` of its border,
-    /// at the edge; else in.
-    pub fn view(&self, beam_rad: f64, margin_rad: f64, z: &SVector<f64, 2>) -> mcmcda::View {
-        let off = wrap_angle_rad(z[1] - beam_rad).abs() - 0.5 * self.beam_width_rad();
-        if !(self.min_range_m..=self.max_range_m).contains(&z[0]) || off > margin_rad {
-            mcmcda::View::Out
-        } else if off > -margin_rad {
-            mcmcda::View::Edge
+    /// How a tracker sees [range, bearing] from the dwell at `beam_rad` ([`sector_view`]), out
+    /// beyond the range.
+    pub fn view(&self, beam_rad: f64, margin_rad: f64, z: &SVector<f64, 2>) -> View {
+        if (self.min_range_m..=self.max_range_m).contains(&z[0]) {
+            sector_view(z[1], beam_rad, self.beam_width_rad(), margin_rad)
         } else {
-            mcmcda::View::In
+            View::Out
         }
     }
 
@@ -199,6 +195,19 @@ impl RotatingRadar {
             dwells.push(dwell);
         }
         Ok(dwells)
+    }
+}
+
+/// A bearing against the sector of `width` centred on `centre`: farther than `margin` outside,
+/// out; within `margin` of its border, at the edge; else in (all radians).
+pub(crate) fn sector_view(bearing: f64, centre: f64, width: f64, margin: f64) -> View {
+    let off = wrap_angle_rad(bearing - centre).abs() - 0.5 * width;
+    if off > margin {
+        View::Out
+    } else if off > -margin {
+        View::Edge
+    } else {
+        View::In
     }
 }
 

@@ -352,7 +352,7 @@ fn scores_of_hand_built_runs() {
     let dwells = r
         .simulate(&trajectories, 0.0, 600.0, &mut ChaCha8Rng::seed_from_u64(1))
         .unwrap();
-    let points = truth_points(&r, &trajectories, &dwells);
+    let points = truth_points(&r, &trajectories, &dwells).unwrap();
     assert!(points.len() >= 58, "{} revolutions seen", points.len());
     let run_with = |switch_at: u32| RadarRun::<4> {
         states: points
@@ -421,7 +421,7 @@ fn a_tracker_over_the_dwells_follows_the_aircraft() {
         sigma_turn_rad_s: 0.02,
     };
     let run = track_dwells(&mut gnn, &r, &dwells, birth).unwrap();
-    let points = truth_points(&r, &trajectories, &dwells);
+    let points = truth_points(&r, &trajectories, &dwells).unwrap();
     let s = score(&trajectories, &points, &run, &score_config());
     assert!(s.matched as f64 >= 0.8 * points.len() as f64, "{s:?}");
     assert!(s.position_rmse_m < 150.0, "{s:?}");
@@ -569,7 +569,7 @@ fn sector_columns_keep_a_rotating_radars_tracks() {
     let dwells = r
         .simulate(&trajectories, 0.0, 600.0, &mut ChaCha8Rng::seed_from_u64(6))
         .unwrap();
-    let truth = truth_points(&r, &trajectories, &dwells);
+    let truth = truth_points(&r, &trajectories, &dwells).unwrap();
     let (plots, _) = format_radar_run(&r, &dwells, &trajectories, &truth);
     let config = PlotTrackConfig {
         clutter_log_density: r.clutter_log_density(),

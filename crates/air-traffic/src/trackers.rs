@@ -172,13 +172,7 @@ pub(crate) fn imm_cv_turns(motion: &MotionSettings) -> Result<Imm<4>> {
         Box::new(CoordinatedTurn::new(w, motion.q_accel)?),
         Box::new(CoordinatedTurn::new(-w, motion.q_accel)?),
     ];
-    let switching: Vec<Vec<f64>> = motion
-        .switching_cv_turns
-        .iter()
-        .map(|r| r.to_vec())
-        .collect();
-    Ok(Imm::new(modes, &switching, GaussianFilter::Extended)?
-        .with_start_probabilities(&stationary(&motion.switching_cv_turns))?)
+    imm_with(modes, &motion.switching_cv_turns)
 }
 
 /// The IMM of [`RadarTracker::ImmTurnRate`].
@@ -188,13 +182,18 @@ fn imm_turn_rate(motion: &MotionSettings) -> Result<Imm<5>> {
         Box::new(ConstantVelocityTurnLayout::new(noise)?),
         Box::new(CoordinatedTurnRate::new(noise)?),
     ];
-    let switching: Vec<Vec<f64>> = motion
-        .switching_turn_rate
-        .iter()
-        .map(|r| r.to_vec())
-        .collect();
-    Ok(Imm::new(modes, &switching, GaussianFilter::Extended)?
-        .with_start_probabilities(&stationary(&motion.switching_turn_rate))?)
+    imm_with(modes, &motion.switching_turn_rate)
+}
+
+/// An EKF IMM over `modes` with this switching matrix, starting from its stationary
+/// distribution.
+fn imm_with<const N: usize, const R: usize>(
+    modes: Vec<Mode<N>>,
+    switching: &[[f64; R]; R],
+) -> Result<Imm<N>> {
+    let rows: Vec<Vec<f64>> = switching.iter().map(|r| r.to_vec()).collect();
+    Ok(Imm::new(modes, &rows, GaussianFilter::Extended)?
+        .with_start_probabilities(&stationary(switching))?)
 }
 
 /// Runs `tracker` with `motion` and `gnn` on `scene`.

@@ -11,8 +11,8 @@ use std::collections::BTreeMap;
 use mcmcda::{BirthPrior, Dwell, PlotGnn, PlotTrackState};
 use nalgebra::SVector;
 use tracker_model::{
-    Frame, MeasurementModel, RangeBearing, StateEstimator, Track, TrackId, TrackPoint, TrackSet,
-    Vec2, assignment,
+    Frame, MeasurementModel, RangeBearing, StateEstimator, TrackId, TrackPoint, TrackSet, Vec2,
+    assignment,
 };
 
 use crate::error::Result;
@@ -88,11 +88,8 @@ pub fn truth_points(
     radar: &RotatingRadar,
     trajectories: &[Trajectory],
     dwells: &[RadarDwell],
-) -> Vec<TruthPoint> {
-    let sensor: RangeBearing<2> = match radar.measurement_model() {
-        Ok(s) => s,
-        Err(_) => return Vec::new(),
-    };
+) -> Result<Vec<TruthPoint>> {
+    let sensor: RangeBearing<2> = radar.measurement_model()?;
     let mut seen: BTreeMap<usize, Frame> = BTreeMap::new();
     let mut out = Vec::new();
     for dwell in dwells {
@@ -111,7 +108,7 @@ pub fn truth_points(
             }
         }
     }
-    out
+    Ok(out)
 }
 
 /// The truth as tracks, trajectory i as track i + 1, one point per revolution in view.
@@ -123,11 +120,10 @@ pub fn truth_set(trajectories: &[Trajectory], points: &[TruthPoint]) -> Result<T
             by_track.entry(p.trajectory).or_default().push(point);
         }
     }
-    let tracks = by_track
+    let lists = by_track
         .into_iter()
-        .map(|(i, points)| Track::from_points(TrackId(i as u64 + 1), points))
-        .collect::<tracker_model::Result<Vec<_>>>()?;
-    Ok(TrackSet::from_tracks(tracks)?)
+        .map(|(i, points)| (TrackId(i as u64 + 1), points));
+    Ok(TrackSet::from_point_lists(lists)?)
 }
 
 /// A run's tracks, one point per revolution.
@@ -140,11 +136,7 @@ pub fn track_set<const N: usize>(run: &RadarRun<N>) -> Result<TrackSet> {
             .or_default()
             .push(TrackPoint::at(*frame, Vec2::new(m[0], m[1])));
     }
-    let tracks = by_track
-        .into_iter()
-        .map(|(id, points)| Track::from_points(id, points))
-        .collect::<tracker_model::Result<Vec<_>>>()?;
-    Ok(TrackSet::from_tracks(tracks)?)
+    Ok(TrackSet::from_point_lists(by_track)?)
 }
 
 /// Position and velocity errors of matched pairs, and breaks during turns.

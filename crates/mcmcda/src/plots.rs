@@ -20,8 +20,8 @@ use nalgebra::{Matrix2, SMatrix, SVector};
 use serde::{Deserialize, Serialize};
 use tracker_model::{
     Detection, Error as ModelError, Frame, Gaussian, LinearObservation, MeasurementModel,
-    MeasurementPrediction, RangeBearing, StateEstimator, Track, TrackId, TrackPoint, TrackSet,
-    TrackState, Tracker, Vec2, assignment, ensure_positive,
+    MeasurementPrediction, RangeBearing, StateEstimator, TrackId, TrackPoint, TrackSet, TrackState,
+    Tracker, Vec2, assignment, ensure_positive,
 };
 
 use crate::error::Result;
@@ -500,10 +500,8 @@ impl<E: StateEstimator<N>, const N: usize> Tracker for PointGnn<E, N> {
     }
 
     fn finish(&mut self) -> Result<TrackSet> {
-        let tracks = std::mem::take(&mut self.tracks)
-            .into_iter()
-            .map(|(id, points)| Track::from_points(id, points))
-            .collect::<tracker_model::Result<Vec<_>>>()?;
-        Ok(TrackSet::from_tracks(tracks)?)
+        Ok(TrackSet::from_point_lists(std::mem::take(
+            &mut self.tracks,
+        ))?)
     }
 }

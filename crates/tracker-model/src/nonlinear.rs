@@ -263,36 +263,81 @@ impl GaussianFilter {
     {
         let (mean, spread) = match self {
             GaussianFilter::Extended => {
-                let x = predicted.mean();
-                let h = sensor.jacobian(x);
-                check_finite_matrix(&h, "measurement Jacobian")?;
-                (
-                    sensor.measure(x),
-                    h * predicted.covariance() * h.transpose(),
-                )
+                let lin = linearise(sensor, predicted)?;
+                (lin.zhat, lin.hp * lin.h.transpose())
             }
             GaussianFilter::Unscented(sigma) => {
-                let set = sigma.draw(predicted)?;
-                let zs: Vec<SVector<f64, M>> =
-                    set.points.iter().map(|p| sensor.measure(p)).collect();
-                let zhat = sensor.weighted_mean(&zs, &set.wm);
-                let spread = zs
-                    .iter()
-                    .zip(&set.wc)
-                    .fold(SMatrix::zeros(), |acc, (zi, w)| {
-                        let d = sensor.residual(zi, &zhat);
-                        acc + d * d.transpose() * *w
-                    });
-                (zhat, spread)
+                let ut = unscented_measurement(sigma, sensor, predicted)?;
+                (ut.zhat, ut.spread)
             }
         };
-        check_finite_matrix(&mean, "predicted measurement")?;
         let s = symmetrise(&(spread + sensor.noise()));
         Ok(MeasurementPrediction {
             mean,
             chol: CholeskyFactor::new(&s, "innovation covariance")?,
         })
     }
+}
+
+/// The EKF's view of a prediction: ẑ = h(x⁻), H = ∂h/∂x at x⁻ and H P⁻, checked finite.
+struct Linearised<const N: usize, const M: usize> {
+    zhat: SVector<f64, M>,
+    h: SMatrix<f64, M, N>,
+    hp: SMatrix<f64, M, N>,
+}
+
+fn linearise<O, const N: usize, const M: usize>(
+    sensor: &O,
+    predicted: &Gaussian<N>,
+) -> Result<Linearised<N, M>>
+where
+    O: MeasurementModel<N, M> + ?Sized,
+{
+    let x = predicted.mean();
+    let h = sensor.jacobian(x);
+    check_finite_matrix(&h, "measurement Jacobian")?;
+    let zhat = sensor.measure(x);
+    check_finite_matrix(&zhat, "predicted measurement")?;
+    Ok(Linearised {
+        zhat,
+        hp: h * predicted.covariance(),
+        h,
+    })
+}
+
+/// The UKF's view of a prediction: its sigma points through h, ẑ (checked finite),
+/// Σ Wcᵢ (ζᵢ − ẑ)(ζᵢ − ẑ)ᵀ and the cross covariance Σ Wcᵢ (χᵢ − x⁻)(ζᵢ − ẑ)ᵀ.
+struct Transformed<const N: usize, const M: usize> {
+    zhat: SVector<f64, M>,
+    spread: SMatrix<f64, M, M>,
+    cross: SMatrix<f64, N, M>,
+}
+
+fn unscented_measurement<O, const N: usize, const M: usize>(
+    sigma: &SigmaPoints,
+    sensor: &O,
+    predicted: &Gaussian<N>,
+) -> Result<Transformed<N, M>>
+where
+    O: MeasurementModel<N, M> + ?Sized,
+{
+    let set = sigma.draw(predicted)?;
+    let zs: Vec<SVector<f64, M>> = set.points.iter().map(|p| sensor.measure(p)).collect();
+    let zhat = sensor.weighted_mean(&zs, &set.wm);
+    check_finite_matrix(&zhat, "predicted measurement")?;
+    let x = predicted.mean();
+    let mut spread = SMatrix::<f64, M, M>::zeros();
+    let mut cross = SMatrix::<f64, N, M>::zeros();
+    for ((p, zi), w) in set.points.iter().zip(&zs).zip(&set.wc) {
+        let dz = sensor.residual(zi, &zhat);
+        spread += dz * dz.transpose() * *w;
+        cross += (p - x) * dz.transpose() * *w;
+    }
+    Ok(Transformed {
+        zhat,
+        spread,
+        cross,
+    })
 }
 
 /// The EKF update: H = ∂h/∂x at x⁻, residual z − h(x⁻) (wrapped by the model), Joseph form.
@@ -304,12 +349,7 @@ fn extended_update<O, const N: usize, const M: usize>(
 where
     O: MeasurementModel<N, M> + ?Sized,
 {
-    let x = predicted.mean();
-    let h = sensor.jacobian(x);
-    check_finite_matrix(&h, "measurement Jacobian")?;
-    let zhat = sensor.measure(x);
-    check_finite_matrix(&zhat, "predicted measurement")?;
-    let hp = h * predicted.covariance();
+    let Linearised { zhat, h, hp } = linearise(sensor, predicted)?;
     let r = sensor.noise();
     let innovated =
         innovation_from_residual(hp, hp * h.transpose(), &r, sensor.residual(z, &zhat))?;
@@ -330,25 +370,19 @@ fn unscented_update<O, const N: usize, const M: usize>(
 where
     O: MeasurementModel<N, M> + ?Sized,
 {
-    let set = sigma.draw(predicted)?;
-    let zs: Vec<SVector<f64, M>> = set.points.iter().map(|p| sensor.measure(p)).collect();
-    let zhat = sensor.weighted_mean(&zs, &set.wm);
-    check_finite_matrix(&zhat, "predicted measurement")?;
-    let x = predicted.mean();
-    let mut s = SMatrix::<f64, M, M>::zeros();
-    let mut cross = SMatrix::<f64, N, M>::zeros();
-    for ((p, zi), w) in set.points.iter().zip(&zs).zip(&set.wc) {
-        let dz = sensor.residual(zi, &zhat);
-        s += dz * dz.transpose() * *w;
-        cross += (p - x) * dz.transpose() * *w;
-    }
+    let Transformed {
+        zhat,
+        spread,
+        cross,
+    } = unscented_measurement(sigma, sensor, predicted)?;
     // Passing Pxzᵀ as "H P" and S − R as "H P Hᵀ" gives S, its factor and the likelihood from
     // the same code as the EKF.
     let r = sensor.noise();
-    let innovated = innovation_from_residual(cross.transpose(), s, &r, sensor.residual(z, &zhat))?;
+    let residual = sensor.residual(z, &zhat);
+    let innovated = innovation_from_residual(cross.transpose(), spread, &r, residual)?;
     let s_full = innovated.innovation.covariance;
     let gain = innovated.chol.solve(&cross.transpose()).transpose();
-    let mean = x + gain * innovated.innovation.residual;
+    let mean = predicted.mean() + gain * innovated.innovation.residual;
     let cov = predicted.covariance() - gain * s_full * gain.transpose();
     check_finite_matrix(&cov, "updated covariance")?;
     Ok(Updated {

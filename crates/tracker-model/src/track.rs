@@ -339,6 +339,18 @@ impl TrackSet {
         Ok(Self { tracks })
     }
 
+    /// A set from each track's id and points (the points' frames strictly increasing, the ids
+    /// distinct): what a tracker that collects points by id builds at the end.
+    pub fn from_point_lists(
+        lists: impl IntoIterator<Item = (TrackId, Vec<TrackPoint>)>,
+    ) -> Result<Self> {
+        let tracks = lists
+            .into_iter()
+            .map(|(id, points)| Track::from_points(id, points))
+            .collect::<Result<Vec<_>>>()?;
+        Self::from_tracks(tracks)
+    }
+
     /// Adds a track; its id must be new.
     pub fn push(&mut self, track: Track) -> Result<()> {
         if self.get(track.id).is_some() {

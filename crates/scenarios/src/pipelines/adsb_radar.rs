@@ -181,7 +181,7 @@ fn simulate(
 ) -> Result<RadarRunData> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let dwells = p.radar.simulate(trajectories, span.0, span.1, &mut rng)?;
-    let truth = truth_points(&p.radar, trajectories, &dwells);
+    let truth = truth_points(&p.radar, trajectories, &dwells)?;
     let truth_set = truth_set(trajectories, &truth)?;
     Ok(RadarRunData {
         dwells,
@@ -225,18 +225,19 @@ fn ospa_series(p: &Params, truth: &TrackSet, tracks: &TrackSet) -> Result<Vec<(f
         .collect())
 }
 
-fn scores(p: &Params, data: &RadarRunData, outcome: &TrackerOutcome) -> Result<Scores> {
+/// The run's scores, and its OSPA per revolution (what the mean is taken over).
+fn scores(
+    p: &Params,
+    data: &RadarRunData,
+    outcome: &TrackerOutcome,
+) -> Result<(Scores, Vec<(f64, f64)>)> {
     let cfg = OspaConfig {
         cutoff: p.ospa_cutoff_m,
         order: 2.0,
     };
     let mean = |v: Vec<f64>| v.iter().sum::<f64>() / v.len().max(1) as f64;
-    let ospa = mean(
-        ospa_series(p, &data.truth_set, &outcome.tracks)?
-            .into_iter()
-            .map(|(_, d)| d)
-            .collect(),
-    );
+    let series = ospa_series(p, &data.truth_set, &outcome.tracks)?;
+    let ospa = mean(series.iter().map(|(_, d)| *d).collect());
     let gospa = mean(
         gospa_over_time(&data.truth_set, &outcome.tracks, &cfg)?
             .into_iter()
@@ -247,7 +248,7 @@ fn scores(p: &Params, data: &RadarRunData, outcome: &TrackerOutcome) -> Result<S
         matching: MatchConfig::within_distance(p.match_distance_m),
     };
     let m = evaluate(&data.truth_set, &outcome.tracks, &eval)?;
-    Ok(Scores {
+    let scores = Scores {
         position_rmse_m: outcome.score.position_rmse_m,
         velocity_rmse_m_s: outcome.score.velocity_rmse_m_s,
         break_rate: outcome.score.break_rate(),
@@ -256,7 +257,8 @@ fn scores(p: &Params, data: &RadarRunData, outcome: &TrackerOutcome) -> Result<S
         gospa_m: gospa,
         mota: m.clear.mota,
         idf1: m.identity.idf1,
-    })
+    };
+    Ok((scores, series))
 }
 
 /// The q of the grid with the lowest mean OSPA on the tuning window (the first on a tie).
@@ -274,7 +276,7 @@ fn tune(
             gnn(p),
             &scene(p, trajectories, data, &p.radar),
         )?;
-        grid.push((q, scores(p, data, &outcome)?.ospa_m));
+        grid.push((q, scores(p, data, &outcome)?.0.ospa_m));
     }
     let best = grid
         .iter()
@@ -408,10 +410,11 @@ impl Pipeline for AdsbRadar {
                         gnn(p),
                         &scene(p, &trajectories, data, &p.radar),
                     )?;
+                    let (scored, ospa) = scores(p, data, &outcome)?;
                     if k == 0 {
-                        series = ospa_series(p, &data.truth_set, &outcome.tracks)?;
+                        series = ospa;
                     }
-                    seeds.push(scores(p, data, &outcome)?);
+                    seeds.push(scored);
                     env.progress.advance(1);
                 }
                 Ok(TrackerResult {
