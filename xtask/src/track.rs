@@ -306,22 +306,11 @@ fn every_50th(what: &'static str) -> impl FnMut(u32) {
     }
 }
 
-/// Writes the tracks as MOTChallenge text, boxes rounded to a thousandth of a pixel.
+/// Writes the tracks as MOTChallenge text, boxes rounded to a thousandth of a pixel
+/// ([`mot::text::format_tracks`]).
 fn write_tracks(set: &tracker_model::TrackSet, out: &Path) -> Result<()> {
-    let mut boxes = set.to_mot_rows(0.0);
-    for row in &mut boxes {
-        // Smoothing leaves float noise in the last digits (28.359999999999978); a thousandth
-        // of a pixel is far below any detector's precision.
-        for v in [
-            &mut row.bbox.left,
-            &mut row.bbox.top,
-            &mut row.bbox.width,
-            &mut row.bbox.height,
-        ] {
-            *v = (*v * 1e3).round() / 1e3;
-        }
-    }
-    fs::write(out, format_mot(&boxes)).with_context(|| format!("cannot write {}", out.display()))
+    fs::write(out, mot::text::format_tracks(set))
+        .with_context(|| format!("cannot write {}", out.display()))
 }
 
 /// The configuration `--print-config` prints: what the run would use, `--frames` included

@@ -117,8 +117,8 @@ impl RotatingRadar {
         self.view(beam_rad, 0.0, z) == View::In
     }
 
-    /// How a tracker sees [range, bearing] from the dwell at `beam_rad` ([`sector_view`]), out
-    /// beyond the range.
+    /// How a tracker sees [range, bearing] from the dwell at `beam_rad`: in, at the edge or
+    /// out of the beam's sector widened by `margin_rad` each side, and out beyond the range.
     pub fn view(&self, beam_rad: f64, margin_rad: f64, z: &SVector<f64, 2>) -> View {
         if (self.min_range_m..=self.max_range_m).contains(&z[0]) {
             sector_view(z[1], beam_rad, self.beam_width_rad(), margin_rad)

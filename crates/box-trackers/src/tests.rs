@@ -212,6 +212,35 @@ fn sort_outputs_from_the_third_hit_and_deletes_after_its_buffer() {
 }
 
 #[test]
+fn without_history_steps_the_same_and_keeps_nothing() {
+    let run = |keep: bool| {
+        let config = SortConfig {
+            coast_frames: 2,
+            ..SortConfig::default()
+        };
+        let t = config.build().expect("valid");
+        let mut t = if keep { t } else { t.without_history() };
+        let mut steps = Vec::new();
+        for f in 1..=6 {
+            let dets: Vec<Detection> = if f == 5 {
+                Vec::new()
+            } else {
+                vec![det(u64::from(f), f, 100.0 + f64::from(f), 50.0, 0.9)]
+            };
+            steps.push(t.step(f, &dets).expect("step"));
+        }
+        (steps, t.finish().expect("finish"))
+    };
+    let (kept_steps, kept) = run(true);
+    let (steps, nothing) = run(false);
+    assert_eq!(steps, kept_steps);
+    // The coasted frame 5 is among the steps' output.
+    assert!(steps[4].len() == 1 && steps[5].len() == 1);
+    assert_eq!(kept.n_points(), 4);
+    assert!(nothing.is_empty());
+}
+
+#[test]
 fn a_gap_steps_like_its_empty_frames_and_a_huge_gap_is_cheap() {
     let frames = [1, 2, 3, 6, 7];
     let run = |with_empty: bool| {

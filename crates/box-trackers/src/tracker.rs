@@ -120,6 +120,9 @@ pub struct BoxTracker<A> {
     coast_frames: u32,
     ids: IdSource,
     previous: Option<Frame>,
+    /// Whether the output is kept for [`Tracker::finish`] (off for a stream read step by
+    /// step, whose memory then grows with the live tracks only).
+    keep_history: bool,
     /// The confirmed tracks' output, by track number (numbers are handed out in order).
     tracks: Vec<Track>,
 }
@@ -132,8 +135,18 @@ impl<A: Association> BoxTracker<A> {
             coast_frames: 0,
             ids: IdSource::default(),
             previous: None,
+            keep_history: true,
             tracks: Vec::new(),
         }
+    }
+
+    /// The same tracker keeping no output for [`Tracker::finish`] (which then returns no
+    /// track): for a stream whose steps are all the caller reads, so memory stays bounded by
+    /// the live tracks however long it runs.
+    #[must_use]
+    pub fn without_history(mut self) -> Self {
+        self.keep_history = false;
+        self
     }
 
     /// The same tracker, outputting each confirmed track at its predicted box for up to
@@ -213,6 +226,9 @@ impl<A: Association> BoxTracker<A> {
     }
 
     fn record(&mut self, number: u64, frame: Frame, bbox: BoundingBox) -> Result<()> {
+        if !self.keep_history {
+            return Ok(());
+        }
         while self.tracks.len() as u64 <= number {
             let id = TrackId(self.tracks.len() as u64 + 1);
             self.tracks.push(Track::new(id));

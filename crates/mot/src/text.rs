@@ -66,6 +66,20 @@ pub fn load_evaluation_pair(
     (pred_text, pred_file): (&str, &str),
 ) -> Result<EvaluationPair> {
     let (gt_rows, mut notes) = read_rows(gt_text, gt_file)?;
+    let (pred_rows, pred_notes) = read_rows(pred_text, pred_file)?;
+    notes.extend(pred_notes);
+    let mut pair = evaluation_pair_of_rows((gt_rows, gt_file), (pred_rows, pred_file))?;
+    notes.append(&mut pair.notes);
+    pair.notes = notes;
+    Ok(pair)
+}
+
+/// [`load_evaluation_pair`] on rows already read (from arrays, say): the same conventions,
+/// errors and notes naming `gt_file` and `pred_file`.
+pub fn evaluation_pair_of_rows(
+    (gt_rows, gt_file): (Vec<MotRow>, &str),
+    (pred_rows, pred_file): (Vec<MotRow>, &str),
+) -> Result<EvaluationPair> {
     let n_gt_rows = gt_rows.len();
     let gt_rows: Vec<MotRow> = gt_rows
         .into_iter()
@@ -86,8 +100,7 @@ pub fn load_evaluation_pair(
         file: gt_file.into(),
         error,
     })?;
-    let (pred_rows, pred_notes) = read_rows(pred_text, pred_file)?;
-    notes.extend(pred_notes);
+    let mut notes = Vec::new();
     if pred_rows.is_empty() {
         notes.push(format!(
             "{pred_file} holds no tracks: every truth object counts as missed (MOTA, recall, \
@@ -99,6 +112,24 @@ pub fn load_evaluation_pair(
         error,
     })?;
     Ok(EvaluationPair { gt, pred, notes })
+}
+
+/// Tracks as the MOTChallenge text `cargo xtask track` writes: rows by frame, boxes rounded
+/// to a thousandth of a pixel (smoothing leaves float noise in the last digits,
+/// 28.359999999999978, and a thousandth of a pixel is far below any detector's precision).
+pub fn format_tracks(set: &TrackSet) -> String {
+    let mut boxes = set.to_mot_rows(0.0);
+    for row in &mut boxes {
+        for v in [
+            &mut row.bbox.left,
+            &mut row.bbox.top,
+            &mut row.bbox.width,
+            &mut row.bbox.height,
+        ] {
+            *v = (*v * 1e3).round() / 1e3;
+        }
+    }
+    tracker_model::format_mot(&boxes)
 }
 
 /// [`load_evaluation_pair`] without the notes.

@@ -1,0 +1,108 @@
+"""Type stubs of the Rust extension module (the public API is re-exported by the package)."""
+
+from os import PathLike
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+import numpy.typing as npt
+
+class TrackingError(ValueError):
+    """Bad input or settings for a tracker, a metric or a model; the Rust error's message."""
+
+class BoxTracker:
+    """SORT ("sort"), ByteTrack ("bytetrack") or OC-SORT ("ocsort") with `params`."""
+
+    def __init__(self, kind: str, params: Mapping[str, Any] | None = None) -> None: ...
+    def update(self, dets: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """(N, 6) x1, y1, x2, y2, score, class -> (M, 8) x1, y1, x2, y2, id, score, class,
+        detection index."""
+    @property
+    def frame_count(self) -> int: ...
+
+def tracker_names() -> list[str]:
+    """The detection-file trackers: mcmcda, mcmcda-online, gnn, gnn-online, phd, sort,
+    bytetrack, ocsort."""
+
+def track(
+    dets_by_frame: Iterable[npt.ArrayLike],
+    tracker: str = "mcmcda",
+    config: Mapping[str, Any] | str | PathLike[str] | None = None,
+    seed: int = 0,
+) -> npt.NDArray[np.float64]:
+    """Tracks frames of detections (frame i + 1 is ``dets_by_frame[i]``, each (N, 6):
+    x1, y1, x2, y2, score, class) with a detection-file tracker, as ``cargo xtask track``
+    does (its model fitted to the detections; ``config`` holds the TOML tables, as a dict or
+    a path). Returns MOTChallenge rows (K, 6): frame, id, left, top, width, height, by
+    frame, which ``evaluate`` reads as they are."""
+
+def track_file(
+    path: str | PathLike[str],
+    tracker: str = "mcmcda",
+    config: Mapping[str, Any] | str | PathLike[str] | None = None,
+    seed: int = 0,
+    out: str | PathLike[str] | None = None,
+) -> npt.NDArray[np.float64]:
+    """``cargo xtask track --input path --tracker tracker [--config] [--seed] --out out``:
+    tracks a MOTChallenge detection file, writes the tracks to ``out`` when given (the same
+    text) and returns them as ``track`` does."""
+
+def evaluate(
+    gt: npt.ArrayLike | str | PathLike[str],
+    pred: npt.ArrayLike | str | PathLike[str],
+    iou: float = 0.5,
+    distance: float | None = None,
+    ospa_cutoff: float | None = None,
+) -> dict[str, Any]:
+    """Scores tracker output against ground truth, each a MOTChallenge file or an array
+    (K, 6..10): frame, id, left, top, width, height[, conf, x, y, z] (ground-truth rows of
+    conf 0 are ignored, as TrackEval does).
+
+    Boxes match at IoU >= ``iou``, or box centres within ``distance``. Returns CLEAR MOT and
+    identity metrics under py-motmetrics' names (num_frames, num_objects, num_predictions,
+    num_unique_objects, num_detections, num_matches, num_switches, num_false_positives,
+    num_misses, mota, motp (1 - IoU, with IoU matching only), precision, recall, idtp,
+    idfp, idfn, idp, idr, idf1), the same and HOTA under TrackEval's (HOTA, DetA, AssA, LocA,
+    DetRe, DetPr, AssRe, AssPr, MOTA, MOTP, MODA, CLR_Re, CLR_Pr, CLR_TP, CLR_FN, CLR_FP,
+    IDSW, MT, PT, ML, Frag, IDF1, IDR, IDP, IDTP, IDFN, IDFP), SR and FAF (Yoon et al.
+    2016), with ``ospa_cutoff`` (or ``distance``) the mean OSPA and GOSPA (p = 2) over the
+    frames on box centres, and ``notes`` (a skipped header, an empty output)."""
+
+class Hmm:
+    """A checked categorical HMM (pi, A, B)."""
+
+    @staticmethod
+    def dense(
+        startprob: npt.ArrayLike, transmat: npt.ArrayLike, emissionprob: npt.ArrayLike
+    ) -> Hmm: ...
+    @staticmethod
+    def sparse(
+        startprob: npt.ArrayLike,
+        indptr: npt.ArrayLike,
+        col: npt.ArrayLike,
+        data: npt.ArrayLike,
+        emissionprob: npt.ArrayLike,
+    ) -> Hmm: ...
+    @property
+    def startprob(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def emissionprob(self) -> npt.NDArray[np.float64]: ...
+    @property
+    def is_sparse(self) -> bool: ...
+    def transmat_dense(self) -> npt.NDArray[np.float64]: ...
+    def transmat_csr(self) -> tuple[list[int], list[int], list[float]]: ...
+    def score(self, x: npt.ArrayLike, lengths: Sequence[int] | None = None) -> float: ...
+    def decode(
+        self, x: npt.ArrayLike, lengths: Sequence[int] | None = None
+    ) -> tuple[float, npt.NDArray[np.int64]]: ...
+    def posteriors(
+        self, x: npt.ArrayLike, lengths: Sequence[int] | None = None
+    ) -> npt.NDArray[np.float64]: ...
+    def fit(
+        self,
+        x: npt.ArrayLike,
+        lengths: Sequence[int] | None,
+        n_iter: int,
+        tol: float,
+        params: str,
+        priors: tuple[float, float, float],
+    ) -> tuple[Hmm, list[float], bool]: ...
