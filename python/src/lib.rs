@@ -9,6 +9,8 @@ mod arrays;
 mod errors;
 mod hmm;
 mod metrics;
+mod phd;
+mod sensors;
 mod trackers;
 
 /// The extension module.
@@ -16,10 +18,14 @@ mod trackers;
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("TrackingError", m.py().get_type::<errors::TrackingError>())?;
     m.add_class::<trackers::BoxTracker>()?;
+    m.add_class::<phd::PhdTracker>()?;
     m.add_function(wrap_pyfunction!(trackers::track, m)?)?;
     m.add_function(wrap_pyfunction!(trackers::track_file, m)?)?;
     m.add_function(wrap_pyfunction!(trackers::tracker_names, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::evaluate, m)?)?;
     m.add_class::<hmm::Hmm>()?;
+    m.add_class::<sensors::BackgroundSubtractor>()?;
+    m.add_function(wrap_pyfunction!(sensors::beamform, m)?)?;
+    m.add_function(wrap_pyfunction!(sensors::doa, m)?)?;
     Ok(())
 }

@@ -19,9 +19,9 @@ use crate::arrays::{Table, table, to_numpy};
 use crate::errors::{IntoPy, invalid};
 
 /// The columns of a detection array.
-const DETS: &str = "(N, 6): x1, y1, x2, y2, score, class";
+pub(crate) const DETS: &str = "(N, 6): x1, y1, x2, y2, score, class";
 /// The columns `BoxTracker.update` returns.
-const OUT_COLS: usize = 8;
+pub(crate) const OUT_COLS: usize = 8;
 
 /// One of the three box trackers.
 enum Kind {
@@ -32,7 +32,7 @@ enum Kind {
 
 /// Settings from keyword arguments: every key must be a field of `T` (serde's message
 /// names the unknown one and lists the fields).
-fn settings<T: serde::de::DeserializeOwned + Default>(
+pub(crate) fn settings<T: serde::de::DeserializeOwned + Default>(
     params: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<T> {
     match params {
@@ -152,7 +152,7 @@ fn frame_detections(dets: &Table, frame: Frame) -> PyResult<Vec<Detection>> {
 }
 
 /// Row `i`'s x1, y1, x2, y2 as a box (finite, x2 ≥ x1, y2 ≥ y1).
-fn corners_box(d: &[f64], i: usize) -> PyResult<BoundingBox> {
+pub(crate) fn corners_box(d: &[f64], i: usize) -> PyResult<BoundingBox> {
     if !d[..5].iter().all(|v| v.is_finite()) {
         return Err(invalid(format!(
             "dets row {i} has a value that is not finite: {:?}",

@@ -12,20 +12,29 @@ Metrics
     names, HOTA and its parts under TrackEval's, SR/FAF, and OSPA/GOSPA on request.
 HMM
     ``CategoricalHMM``: hmmlearn's shape, with sparse (scipy.sparse) transition matrices.
+Sensors
+    ``BackgroundSubtractorMOG``: ``apply(frame) -> mask`` as OpenCV's; ``beamform`` and
+    ``doa``: delay-and-sum, SRP-PHAT and MVDR on (M, T) signals from an (M, 2) array.
 
 Every error from the Rust side is a ``TrackingError`` (a ``ValueError``) with its message.
 """
 
 from ._native import TrackingError, evaluate, track, track_file, tracker_names
 from .hmm import CategoricalHMM
-from .trackers import ByteTrackTracker, OcSortTracker, SortTracker
+from .sensors import BackgroundSubtractorMOG, beamform, doa
+from .trackers import ByteTrackTracker, GmPhdTracker, OcSortTracker, SmcPhdTracker, SortTracker
 
 __all__ = [
+    "BackgroundSubtractorMOG",
     "ByteTrackTracker",
     "CategoricalHMM",
+    "GmPhdTracker",
     "OcSortTracker",
+    "SmcPhdTracker",
     "SortTracker",
     "TrackingError",
+    "beamform",
+    "doa",
     "evaluate",
     "track",
     "track_file",

@@ -19,6 +19,22 @@ class BoxTracker:
     @property
     def frame_count(self) -> int: ...
 
+class PhdTracker:
+    """SMC-PHD ("smc", seeded) or GM-PHD ("gm", with `gm`, the mixture's settings) on boxes."""
+
+    def __init__(
+        self,
+        kind: str,
+        params: Mapping[str, Any] | None = None,
+        gm: Mapping[str, Any] | None = None,
+        seed: int = 0,
+    ) -> None: ...
+    def update(self, dets: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """(N, 6) x1, y1, x2, y2, score, class -> (M, 8) x1, y1, x2, y2, label, weight,
+        class, detection index (-1 for GM-PHD)."""
+    @property
+    def frame_count(self) -> int: ...
+
 def tracker_names() -> list[str]:
     """The detection-file trackers: mcmcda, mcmcda-online, gnn, gnn-online, phd, sort,
     bytetrack, ocsort."""
@@ -106,3 +122,25 @@ class Hmm:
         params: str,
         priors: tuple[float, float, float],
     ) -> tuple[Hmm, list[float], bool]: ...
+
+class BackgroundSubtractor:
+    """Mixture-of-Gaussians background subtraction with `params` (MogConfig's fields)."""
+
+    def __init__(self, params: Mapping[str, Any] | None = None) -> None: ...
+    def apply(self, frame: npt.NDArray[np.uint8]) -> npt.NDArray[np.uint8]: ...
+    @property
+    def frame_count(self) -> int: ...
+
+def beamform(
+    signals: npt.ArrayLike, mics: npt.ArrayLike, params: Mapping[str, Any] | None = None
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """(frame centre times (F,), beam energies (F, B))."""
+
+def doa(
+    signals: npt.ArrayLike,
+    mics: npt.ArrayLike,
+    max_peaks: int = 1,
+    min_relative: float = 0.1,
+    params: Mapping[str, Any] | None = None,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """(bearings in radians (P,), their summed energies (P,))."""
