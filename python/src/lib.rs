@@ -7,7 +7,9 @@ use pyo3::prelude::*;
 
 mod arrays;
 mod errors;
+mod gap;
 mod hmm;
+mod kalman;
 mod metrics;
 mod phd;
 mod sensors;
@@ -24,6 +26,9 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(trackers::tracker_names, m)?)?;
     m.add_function(wrap_pyfunction!(metrics::evaluate, m)?)?;
     m.add_class::<hmm::Hmm>()?;
+    m.add_function(wrap_pyfunction!(gap::recover_gap, m)?)?;
+    m.add_function(wrap_pyfunction!(kalman::kalman, m)?)?;
+    m.add_function(wrap_pyfunction!(kalman::rts_smooth, m)?)?;
     m.add_class::<sensors::BackgroundSubtractor>()?;
     m.add_function(wrap_pyfunction!(sensors::beamform, m)?)?;
     m.add_function(wrap_pyfunction!(sensors::doa, m)?)?;

@@ -12,6 +12,10 @@ Metrics
     names, HOTA and its parts under TrackEval's, SR/FAF, and OSPA/GOSPA on request.
 HMM
     ``CategoricalHMM``: hmmlearn's shape, with sparse (scipy.sparse) transition matrices.
+Filters
+    ``KalmanFilter``: filterpy's shape, ``batch_filter`` and ``rts_smoother``.
+Gap recovery
+    ``recover_gap(a, b, method="gdt")``: goal-directed tracking and the spline baselines.
 Sensors
     ``BackgroundSubtractorMOG``: ``apply(frame) -> mask`` as OpenCV's; ``beamform`` and
     ``doa``: delay-and-sum, SRP-PHAT and MVDR on (M, T) signals from an (M, 2) array.
@@ -20,6 +24,8 @@ Every error from the Rust side is a ``TrackingError`` (a ``ValueError``) with it
 """
 
 from ._native import TrackingError, evaluate, track, track_file, tracker_names
+from .filters import KalmanFilter
+from .gaps import recover_gap
 from .hmm import CategoricalHMM
 from .sensors import BackgroundSubtractorMOG, beamform, doa
 from .trackers import ByteTrackTracker, GmPhdTracker, OcSortTracker, SmcPhdTracker, SortTracker
@@ -29,6 +35,7 @@ __all__ = [
     "ByteTrackTracker",
     "CategoricalHMM",
     "GmPhdTracker",
+    "KalmanFilter",
     "OcSortTracker",
     "SmcPhdTracker",
     "SortTracker",
@@ -36,6 +43,7 @@ __all__ = [
     "beamform",
     "doa",
     "evaluate",
+    "recover_gap",
     "track",
     "track_file",
     "tracker_names",

@@ -144,3 +144,29 @@ def doa(
     params: Mapping[str, Any] | None = None,
 ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """(bearings in radians (P,), their summed energies (P,))."""
+
+def kalman(
+    f: npt.ArrayLike,
+    q: npt.ArrayLike,
+    h: npt.ArrayLike,
+    r: npt.ArrayLike,
+    x: npt.ArrayLike,
+    p: npt.ArrayLike,
+    zs: npt.ArrayLike,
+    rts: bool = False,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], float]:
+    """Filtered (or with `rts` smoothed) means (T, N), covariances (T, N * N), log-likelihood;
+    (x, P) is the prior at the first step; a NaN row of zs is missing."""
+
+def rts_smooth(
+    f: npt.ArrayLike, q: npt.ArrayLike, means: npt.ArrayLike, covs: npt.ArrayLike
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], float]:
+    """RTS over filtered means (T, N) and covariances (T, N * N)."""
+
+def recover_gap(
+    a: npt.ArrayLike,
+    b: npt.ArrayLike,
+    method: str = "gdt",
+    params: Mapping[str, Any] | None = None,
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """(recovered (G, 3) frame, x, y; covariances (G, 4), empty for a baseline)."""
