@@ -12,6 +12,7 @@ mod hmm;
 mod kalman;
 mod metrics;
 mod phd;
+mod plots;
 mod sensors;
 mod trackers;
 
@@ -21,6 +22,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("TrackingError", m.py().get_type::<errors::TrackingError>())?;
     m.add_class::<trackers::BoxTracker>()?;
     m.add_class::<phd::PhdTracker>()?;
+    m.add_function(wrap_pyfunction!(plots::track_plot_rows, m)?)?;
     m.add_function(wrap_pyfunction!(trackers::track, m)?)?;
     m.add_function(wrap_pyfunction!(trackers::track_file, m)?)?;
     m.add_function(wrap_pyfunction!(trackers::tracker_names, m)?)?;

@@ -28,7 +28,14 @@ from .filters import KalmanFilter
 from .gaps import recover_gap
 from .hmm import CategoricalHMM
 from .sensors import BackgroundSubtractorMOG, beamform, doa
-from .trackers import ByteTrackTracker, GmPhdTracker, OcSortTracker, SmcPhdTracker, SortTracker
+from .trackers import (
+    ByteTrackTracker,
+    GmPhdTracker,
+    OcSortTracker,
+    SmcPhdTracker,
+    SortTracker,
+    track_plots,
+)
 
 __all__ = [
     "BackgroundSubtractorMOG",
@@ -46,5 +53,6 @@ __all__ = [
     "recover_gap",
     "track",
     "track_file",
+    "track_plots",
     "tracker_names",
 ]

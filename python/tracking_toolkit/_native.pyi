@@ -170,3 +170,10 @@ def recover_gap(
     params: Mapping[str, Any] | None = None,
 ) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """(recovered (G, 3) frame, x, y; covariances (G, 4), empty for a baseline)."""
+
+def track_plot_rows(
+    plots: npt.ArrayLike | str | PathLike[str],
+    filter: str = "imm",
+    params: Mapping[str, Any] | None = None,
+) -> npt.NDArray[np.float64]:
+    """(R, 7): time_s, id, x, y, vx, vy, hit."""

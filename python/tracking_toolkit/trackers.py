@@ -126,3 +126,21 @@ class GmPhdTracker(SmcPhdTracker):
         gm = {k: params.pop(k) for k in self._GM_KEYS if k in params}
         self._args = dict(params=params, gm=gm)
         self.reset()
+
+
+def track_plots(plots, filter: str = "imm", **params) -> np.ndarray:
+    """Radar or point plots tracked by GNN with ``filter`` ("kf", "ekf", "ukf" or "imm"), as
+    ``cargo xtask track --plots`` does.
+
+    ``plots``: a plot file's path (CSV, ``time_s,sensor,sensor_x,sensor_y`` and ``x,y`` or
+    ``range,bearing``, optionally their sigmas and the dwell's sector; docs/aircraft.md), or
+    position plots as an array (K, 6): time_s, sensor, sensor_x, sensor_y, x, y. Settings are
+    ``air_traffic::PlotTrackConfig``'s fields (``q_accel``, ``sigma_range_m``,
+    ``sigma_bearing_rad``, ``gate_chi2``, ``confirm_hits``, ...). Returns (R, 7): time_s, id,
+    x, y, vx, vy, hit (1 where a plot updated the track, 0 where it coasted).
+
+    The default ``clutter_log_density`` is ln of false alarms per metre-radian, for
+    range-bearing plots; for x, y plots give it per square metre (e.g. ``np.log(1e-10)``),
+    else the default makes every plot likelier clutter than a track's next position.
+    """
+    return _native.track_plot_rows(plots, filter, params)
