@@ -11,6 +11,7 @@ mod gap;
 mod hmm;
 mod kalman;
 mod metrics;
+mod online;
 mod phd;
 mod plots;
 mod sensors;
@@ -22,6 +23,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("TrackingError", m.py().get_type::<errors::TrackingError>())?;
     m.add_class::<trackers::BoxTracker>()?;
     m.add_class::<phd::PhdTracker>()?;
+    m.add_class::<online::McmcdaOnline>()?;
     m.add_function(wrap_pyfunction!(plots::track_plot_rows, m)?)?;
     m.add_function(wrap_pyfunction!(trackers::track, m)?)?;
     m.add_function(wrap_pyfunction!(trackers::track_file, m)?)?;

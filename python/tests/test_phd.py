@@ -70,3 +70,52 @@ def test_bad_settings_raise():
         tt.GmPhdTracker(max_components=0)
     with pytest.raises(ValueError, match="shape"):
         tt.GmPhdTracker().update(np.zeros((1, 4)))
+
+
+# ---------------------------------------------------------------------------------------
+# Online MCMCDA on points
+
+
+def two_walkers(scans=30):
+    """Two points moving 14 units a scan whose paths cross at (250, 250) at scan 15, seen
+    every scan (their x coordinates are equal throughout)."""
+    return [
+        np.array([[100.0 + 10 * t, 100.0 + 10 * t], [100.0 + 10 * t, 400.0 - 10 * t]])
+        for t in range(scans)
+    ]
+
+
+MODEL = dict(volume=1e6, clutter_per_scan=0.1, p_detect=0.99, measurement_noise=[[1.0, 0.0], [0.0, 1.0]])
+
+
+def test_online_mcmcda_follows_two_targets_through_their_crossing():
+    tracker = tt.OnlineMcmcdaTracker(seed=1, model=MODEL, samples_per_scan=500)
+    labels = []
+    for t, points in enumerate(two_walkers()):
+        out = tracker.update(points)
+        if t < 5:
+            continue
+        if t == 15:
+            continue  # both targets at one point: one estimate or two
+        assert out.shape == (2, 3), t
+        for est in out:
+            assert np.hypot(*(points - est[:2]).T).min() < 5.0
+        # The label of the target moving up (y grows), wherever it is.
+        rising = out[np.argmin(np.hypot(*(out[:, :2] - points[0]).T)), 2]
+        labels.append(rising)
+    assert len(set(labels)) == 1
+    assert tracker.frame_count == 30
+
+
+def test_online_mcmcda_is_reproducible_and_checks_its_settings():
+    runs = []
+    for _ in range(2):
+        tracker = tt.OnlineMcmcdaTracker(seed=5, model=MODEL, samples_per_scan=200)
+        runs.append(np.concatenate([tracker.update(p) for p in two_walkers(12)]))
+    assert runs[0].tobytes() == runs[1].tobytes()
+    with pytest.raises(tt.TrackingError, match="samples_per_scan"):
+        tt.OnlineMcmcdaTracker(samples_per_scan=0)
+    with pytest.raises(tt.TrackingError, match="p_detect"):
+        tt.OnlineMcmcdaTracker(model=dict(p_detect=2.0))
+    with pytest.raises(ValueError, match="shape"):
+        tt.OnlineMcmcdaTracker().update(np.zeros((3, 6)))

@@ -35,6 +35,20 @@ class PhdTracker:
     @property
     def frame_count(self) -> int: ...
 
+class McmcdaOnline:
+    """Online MCMCDA with `model` (McmcdaConfig's fields) and `params` (OnlineConfig's)."""
+
+    def __init__(
+        self,
+        model: Mapping[str, Any] | None = None,
+        params: Mapping[str, Any] | None = None,
+        seed: int = 0,
+    ) -> None: ...
+    def update(self, points: npt.ArrayLike) -> npt.NDArray[np.float64]:
+        """(N, 2) x, y -> (M, 3) x, y, label."""
+    @property
+    def frame_count(self) -> int: ...
+
 def tracker_names() -> list[str]:
     """The detection-file trackers: mcmcda, mcmcda-online, gnn, gnn-online, phd, sort,
     bytetrack, ocsort."""

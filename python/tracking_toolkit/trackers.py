@@ -144,3 +144,32 @@ def track_plots(plots, filter: str = "imm", **params) -> np.ndarray:
     else the default makes every plot likelier clutter than a track's next position.
     """
     return _native.track_plot_rows(plots, filter, params)
+
+
+class OnlineMcmcdaTracker:
+    """Online (sliding-window) MCMCDA (Oh, Russell & Sastry 2009) on point detections.
+
+    ``model``: ``mcmcda::McmcdaConfig``'s fields as a dict (``volume``, ``births_per_scan``,
+    ``clutter_per_scan``, ``p_detect``, ``measurement_noise`` as rows, ``max_gap``,
+    ``max_speed``, ...); other keyword arguments are ``mcmcda::OnlineConfig``'s
+    (``window=14``, ``samples_per_scan=2000``, ``coast_scans=2``, ``chains=1``, ...).
+    ``seed`` seeds the chains. ``update(points)`` takes a scan's (N, 2) points and returns
+    (M, 3): x, y, label of the tracks the window's MAP reports at that scan.
+    """
+
+    def __init__(self, seed: int = 0, model: dict | None = None, **params):
+        self._args = dict(model=dict(model or {}), params=dict(params), seed=seed)
+        self.reset()
+
+    def reset(self) -> None:
+        """Starts afresh (with the same seed)."""
+        self._native = _native.McmcdaOnline(**self._args)
+
+    def update(self, points) -> np.ndarray:
+        """One scan's points (N, 2) -> the reported tracks (M, 3): x, y, label."""
+        return self._native.update(points)
+
+    @property
+    def frame_count(self) -> int:
+        """Scans stepped since the tracker was made or reset."""
+        return self._native.frame_count
