@@ -7,9 +7,9 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::arrays::{table, to_numpy};
+use crate::arrays::to_numpy;
 use crate::errors::IntoPy;
-use crate::trackers::{DETS, OUT_COLS, corners_box, settings};
+use crate::trackers::{OUT_COLS, read_dets, settings};
 
 enum Filter {
     Smc(Box<SmcPhd>),
@@ -59,12 +59,7 @@ impl PhdTracker {
         py: Python<'py>,
         dets: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let dets = table(dets, "dets", (6, 6), DETS)?;
-        let boxes = dets
-            .iter()
-            .enumerate()
-            .map(|(i, d)| corners_box(d, i))
-            .collect::<PyResult<Vec<_>>>()?;
+        let (dets, boxes) = read_dets(dets)?;
         let step: PhdStep = py
             .detach(|| match &mut self.filter {
                 Filter::Smc(f) => f.step(&boxes),

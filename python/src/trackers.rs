@@ -19,7 +19,7 @@ use crate::arrays::{Table, table, to_numpy};
 use crate::errors::{IntoPy, invalid};
 
 /// The columns of a detection array.
-pub(crate) const DETS: &str = "(N, 6): x1, y1, x2, y2, score, class";
+const DETS: &str = "(N, 6): x1, y1, x2, y2, score, class";
 /// The columns `BoxTracker.update` returns.
 pub(crate) const OUT_COLS: usize = 8;
 
@@ -55,7 +55,7 @@ type Coasted = (u64, [f64; 4]);
 type StepOutput = (Vec<(u64, usize)>, Vec<Coasted>);
 
 impl BoxTracker {
-    fn step(&mut self, detections: &[Detection]) -> PyResult<StepOutput> {
+    fn step(&mut self, frame: Frame, detections: &[Detection]) -> PyResult<StepOutput> {
         fn run<A: box_trackers::Association>(
             t: &mut Stepper<A>,
             frame: Frame,
@@ -72,7 +72,6 @@ impl BoxTracker {
                 coasted,
             ))
         }
-        let frame = self.frame;
         match &mut self.tracker {
             Kind::Sort(t) => run(t, frame, detections),
             Kind::ByteTrack(t) => run(t, frame, detections),
@@ -88,22 +87,31 @@ impl BoxTracker {
     #[new]
     #[pyo3(signature = (kind, params=None))]
     fn new(kind: &str, params: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        // No history: `update` returns all a caller reads, so memory stays with the live tracks.
         let tracker = match kind {
-            "sort" => Kind::Sort(settings::<SortConfig>(params)?.build().or_raise()?),
-            "bytetrack" => {
-                Kind::ByteTrack(settings::<ByteTrackConfig>(params)?.build().or_raise()?)
-            }
-            "ocsort" => Kind::OcSort(settings::<OcSortConfig>(params)?.build().or_raise()?),
+            "sort" => Kind::Sort(
+                settings::<SortConfig>(params)?
+                    .build()
+                    .or_raise()?
+                    .without_history(),
+            ),
+            "bytetrack" => Kind::ByteTrack(
+                settings::<ByteTrackConfig>(params)?
+                    .build()
+                    .or_raise()?
+                    .without_history(),
+            ),
+            "ocsort" => Kind::OcSort(
+                settings::<OcSortConfig>(params)?
+                    .build()
+                    .or_raise()?
+                    .without_history(),
+            ),
             other => {
                 return Err(invalid(format!(
                     "unknown box tracker {other:?}; expected sort, bytetrack or ocsort"
                 )));
             }
-        };
-        let tracker = match tracker {
-            Kind::Sort(t) => Kind::Sort(t.without_history()),
-            Kind::ByteTrack(t) => Kind::ByteTrack(t.without_history()),
-            Kind::OcSort(t) => Kind::OcSort(t.without_history()),
         };
         Ok(Self { tracker, frame: 0 })
     }
@@ -115,13 +123,18 @@ impl BoxTracker {
         py: Python<'py>,
         dets: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-        let dets = table(dets, "dets", (6, 6), DETS)?;
+        let (dets, boxes) = read_dets(dets)?;
         let next = self.frame.checked_add(1).ok_or_else(|| {
             PyValueError::new_err("the tracker has stepped u32::MAX frames; start a new one")
         })?;
-        let detections = frame_detections(&dets, next)?;
+        let detections: Vec<Detection> = boxes
+            .into_iter()
+            .enumerate()
+            .map(|(i, b)| Detection::boxed(i as u64, next, b).with_score(dets.row(i)[4]))
+            .collect();
+        // Advanced first: a step that failed half-way has still used its frame number.
         self.frame = next;
-        let (assigned, coasted) = py.detach(|| self.step(&detections))?;
+        let (assigned, coasted) = py.detach(|| self.step(next, &detections))?;
         let mut out = Vec::with_capacity((assigned.len() + coasted.len()) * OUT_COLS);
         for (id, index) in assigned {
             let d = dets.row(index);
@@ -140,15 +153,15 @@ impl BoxTracker {
     }
 }
 
-/// A frame's (N, 6) rows as box detections at `frame`, ids their row numbers.
-fn frame_detections(dets: &Table, frame: Frame) -> PyResult<Vec<Detection>> {
-    dets.iter()
+/// A frame's detections (N, 6) and their boxes.
+pub(crate) fn read_dets(obj: &Bound<'_, PyAny>) -> PyResult<(Table, Vec<BoundingBox>)> {
+    let dets = table(obj, "dets", (6, 6), DETS)?;
+    let boxes = dets
+        .iter()
         .enumerate()
-        .map(|(i, d)| {
-            let bbox = corners_box(d, i)?;
-            Ok(Detection::boxed(i as u64, frame, bbox).with_score(d[4]))
-        })
-        .collect()
+        .map(|(i, d)| corners_box(d, i))
+        .collect::<PyResult<Vec<_>>>()?;
+    Ok((dets, boxes))
 }
 
 /// Row `i`'s x1, y1, x2, y2 as a box (finite, x2 ≥ x1, y2 ≥ y1).
