@@ -59,13 +59,26 @@ fn sequences(
 
 #[pymethods]
 impl Hmm {
-    /// A model with a dense transition matrix (stored sparse when mostly zero).
+    /// A model from a dense transition matrix, stored as `storage` says: "auto" (sparse when
+    /// mostly zero), "dense" or "sparse".
     #[staticmethod]
+    #[pyo3(signature = (startprob, transmat, emissionprob, storage="auto"))]
     fn dense(
         startprob: &Bound<'_, PyAny>,
         transmat: &Bound<'_, PyAny>,
         emissionprob: &Bound<'_, PyAny>,
+        storage: &str,
     ) -> PyResult<Self> {
+        let storage = match storage {
+            "auto" => StorageChoice::Auto,
+            "dense" => StorageChoice::Dense,
+            "sparse" => StorageChoice::Sparse,
+            other => {
+                return Err(invalid(format!(
+                    "transmat_storage {other:?}: expected auto, dense or sparse"
+                )));
+            }
+        };
         let a = table(transmat, "transmat", (1, MAX_SIZE), "(N, N)")?;
         if a.rows != a.cols {
             return Err(invalid(format!(
@@ -73,7 +86,7 @@ impl Hmm {
                 a.rows, a.cols
             )));
         }
-        let a = Transitions::from_row_major(a.rows, a.values, StorageChoice::Auto).or_raise()?;
+        let a = Transitions::from_row_major(a.rows, a.values, storage).or_raise()?;
         build(vector(startprob, "startprob")?, a, emissions(emissionprob)?)
     }
 

@@ -102,7 +102,10 @@ class Hmm:
 
     @staticmethod
     def dense(
-        startprob: npt.ArrayLike, transmat: npt.ArrayLike, emissionprob: npt.ArrayLike
+        startprob: npt.ArrayLike,
+        transmat: npt.ArrayLike,
+        emissionprob: npt.ArrayLike,
+        storage: str = "auto",
     ) -> Hmm: ...
     @staticmethod
     def sparse(

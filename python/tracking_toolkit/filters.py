@@ -34,11 +34,15 @@ class KalmanFilter:
         self.log_likelihood_ = 0.0
 
     def _measurements(self, zs) -> np.ndarray:
-        rows = [
-            np.full(self.dim_z, np.nan) if z is None else np.asarray(z, dtype=float).reshape(self.dim_z)
-            for z in zs
-        ]
-        return np.array(rows, dtype=float).reshape(-1, self.dim_z)
+        if isinstance(zs, np.ndarray):
+            return np.asarray(zs, dtype=float).reshape(-1, self.dim_z)
+        missing = np.full(self.dim_z, np.nan)
+        rows = [missing if z is None else z for z in zs]
+        try:
+            # One conversion for the usual list of equal-shaped vectors.
+            return np.array(rows, dtype=float).reshape(len(rows), self.dim_z)
+        except ValueError:
+            return np.array([np.ravel(z) for z in rows], dtype=float).reshape(-1, self.dim_z)
 
     def _prior(self):
         # filterpy's batch_filter predicts before the first update: the prior is F x, F P F' + Q.

@@ -71,7 +71,9 @@ class CategoricalHMM:
 
     Attributes ``startprob_`` (N,), ``transmat_`` (N, N) and ``emissionprob_`` (N, M) may be
     set before ``fit`` (drop their letters from ``init_params``) or used without it.
-    ``transmat_`` may be a scipy.sparse matrix.
+    ``transmat_`` may be a scipy.sparse matrix. ``transmat_storage`` (not hmmlearn's) says
+    how a dense ``transmat_`` is stored: "auto" (sparse when at most a quarter of it is
+    non-zero), "dense" or "sparse"; every algorithm then costs O(T * nnz(A)).
     """
 
     def __init__(
@@ -88,6 +90,7 @@ class CategoricalHMM:
         verbose: bool = False,
         params: str = "ste",
         init_params: str = "ste",
+        transmat_storage: str = "auto",
     ):
         self.n_components = n_components
         self.startprob_prior = startprob_prior
@@ -101,6 +104,7 @@ class CategoricalHMM:
         self.verbose = verbose
         self.params = params
         self.init_params = init_params
+        self.transmat_storage = transmat_storage
 
     # -- the model ------------------------------------------------------------------------
 
@@ -121,7 +125,9 @@ class CategoricalHMM:
             return _native.Hmm.sparse(
                 self.startprob_, a.indptr, a.indices, a.data, self.emissionprob_
             )
-        return _native.Hmm.dense(self.startprob_, self.transmat_, self.emissionprob_)
+        return _native.Hmm.dense(
+            self.startprob_, self.transmat_, self.emissionprob_, self.transmat_storage
+        )
 
     def _take(self, model: _native.Hmm, sparse: bool) -> None:
         self.startprob_ = np.asarray(model.startprob)
