@@ -34,6 +34,14 @@ impl Table {
     }
 }
 
+/// `obj` as a numpy array (a list or any array-like through `numpy.asarray`).
+fn as_ndarray<'py>(obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    if obj.cast::<PyUntypedArray>().is_ok() {
+        return Ok(obj.clone());
+    }
+    obj.py().import("numpy")?.call_method1("asarray", (obj,))
+}
+
 /// Checks that `obj`, if it is a numpy array, is numeric with `ndim` dimensions.
 fn check_array(obj: &Bound<'_, PyAny>, name: &str, ndim: usize, shape: &str) -> PyResult<()> {
     if let Ok(array) = obj.cast::<PyUntypedArray>() {
@@ -62,6 +70,7 @@ pub fn table(
     (min_cols, max_cols): (usize, usize),
     shape: &str,
 ) -> PyResult<Table> {
+    let obj = &as_ndarray(obj)?;
     check_array(obj, name, 2, shape)?;
     let array = obj
         .extract::<PyArrayLike2<'_, f64, AllowTypeChange>>()
@@ -87,6 +96,7 @@ pub fn table(
 
 /// `obj` as a 1-D vector of `f64`.
 pub fn vector(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<f64>> {
+    let obj = &as_ndarray(obj)?;
     check_array(obj, name, 1, "(N,)")?;
     let array = obj
         .extract::<PyArrayLike1<'_, f64, AllowTypeChange>>()

@@ -41,7 +41,10 @@ fn sequences(
         return Ok(vec![symbols]);
     };
     let lengths = indices(lengths, "lengths")?;
-    let total: usize = lengths.iter().sum();
+    let total = lengths
+        .iter()
+        .try_fold(0usize, |a, &n| a.checked_add(n))
+        .ok_or_else(|| invalid("lengths overflow when summed"))?;
     if total != symbols.len() {
         return Err(invalid(format!(
             "lengths sum to {total} but X has {} samples",
@@ -104,17 +107,19 @@ impl Hmm {
             indices(col, "transmat.indices")?,
             vector(data, "transmat.data")?,
         );
-        if col.len() != data.len() || indptr.last().copied() != Some(data.len()) {
+        if col.len() != data.len()
+            || indptr.first().copied() != Some(0)
+            || indptr.last().copied() != Some(data.len())
+            || indptr.windows(2).any(|w| w[0] > w[1])
+        {
             return Err(invalid(
-                "transmat is not a valid CSR matrix: indptr, indices and data disagree",
+                "transmat is not a valid CSR matrix: indptr must rise from 0 to the number of \
+                 entries, and indices and data must have that many",
             ));
         }
         let rows = indptr
             .windows(2)
             .map(|w| {
-                if w[0] > w[1] {
-                    return Err(invalid("transmat.indptr decreases"));
-                }
                 Ok(col[w[0]..w[1]]
                     .iter()
                     .copied()

@@ -145,8 +145,13 @@ fn names(r: &EvalReport, n_frames: usize, iou: bool) -> Vec<(&'static str, f64)>
         ("FAF", s.false_alarms_per_frame),
     ];
     if iou {
-        // py-motmetrics' MOTP is the mean distance 1 − IoU of the matches.
-        out.push(("motp", 1.0 - c.motp));
+        // py-motmetrics' MOTP is the mean distance 1 − IoU of the matches (NaN without one).
+        let motp = if c.true_positives == 0 {
+            f64::NAN
+        } else {
+            1.0 - c.motp
+        };
+        out.push(("motp", motp));
     }
     out
 }
@@ -166,7 +171,12 @@ fn ospa_means(gt: &TrackSet, pred: &TrackSet, cutoff: f64) -> PyResult<[(&'stati
     ])
 }
 
-/// Scores `pred` against `gt` (arrays or file paths).
+/// Scores `pred` against `gt`: MOTChallenge files or arrays (K, 6..10) frame, id, left, top,
+/// width, height[, conf, x, y, z] (ground-truth rows of conf 0 are ignored). Boxes match at
+/// IoU >= `iou`, or centres within `distance`. Returns a dict: CLEAR MOT and identity
+/// metrics under py-motmetrics' names, the same and HOTA under TrackEval's, SR and FAF, the
+/// mean OSPA and GOSPA with `ospa_cutoff` (or `distance`), and `notes`. CLEAR's matching is
+/// TrackEval's (see the stub for where py-motmetrics' switch count can differ).
 #[pyfunction]
 #[pyo3(signature = (gt, pred, iou=0.5, distance=None, ospa_cutoff=None))]
 pub fn evaluate<'py>(

@@ -50,6 +50,11 @@ impl McmcdaOnline {
         points: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArray2<f64>>> {
         let t = table(points, "points", (2, 2), "(N, 2): x, y")?;
+        if let Some(i) = t.iter().position(|r| !r.iter().all(|v| v.is_finite())) {
+            return Err(invalid(format!(
+                "points row {i} has a value that is not finite"
+            )));
+        }
         let points: Vec<Vec2> = t.iter().map(|r| Vec2::new(r[0], r[1])).collect();
         let frame = self
             .frame

@@ -47,14 +47,18 @@ def test_kalman_filter_and_rts_equal_the_textbook():
     zs = [None if k % 10 == 3 else np.array([k + 2 * rng.normal(), k + 2 * rng.normal()]) for k in range(200)]
     kf = tt.KalmanFilter(dim_x=4, dim_z=2)
     kf.F, kf.Q, kf.H, kf.R = F, Q, H, R
-    kf.x, kf.P = np.array([[0.0], [0.0], [1.0], [1.0]]), 10.0 * np.eye(4)
+    x0, p0 = np.array([[0.0], [0.0], [1.0], [1.0]]), 10.0 * np.eye(4)
+    kf.x, kf.P = x0, p0
     mu, cov = kf.batch_filter(zs)
-    want_mu, want_cov, want_smu, want_scov = textbook(F, Q, H, R, kf.x, kf.P, zs)
+    # As filterpy, the filter is left at its last estimate.
+    np.testing.assert_array_equal(kf.x.ravel(), mu[-1])
+    want_mu, want_cov, want_smu, want_scov = textbook(F, Q, H, R, x0, p0, zs)
     np.testing.assert_allclose(mu, want_mu, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(cov, want_cov, rtol=1e-9, atol=1e-9)
     smu, scov = kf.rts_smoother(mu, cov)
     np.testing.assert_allclose(smu, want_smu, rtol=1e-9, atol=1e-9)
     np.testing.assert_allclose(scov, want_scov, rtol=1e-9, atol=1e-9)
+    kf.x, kf.P = x0, p0
     smu2, scov2 = kf.smooth(zs)
     np.testing.assert_allclose(smu2, want_smu, rtol=1e-9, atol=1e-9)
     assert np.isfinite(kf.log_likelihood_) and kf.log_likelihood_ < 0
@@ -80,9 +84,15 @@ def test_bad_models_raise():
     with pytest.raises(tt.TrackingError, match="measurement noise"):
         kf.batch_filter([np.array([1.0])])
     kf.R = np.eye(1)
-    kf.F = np.eye(3)
-    with pytest.raises(ValueError):
+    # A 3-state F, Q, x and P with a 2-state H: the Rust side names the mismatch.
+    kf.F, kf.Q, kf.x, kf.P = np.eye(3), np.eye(3), np.zeros((3, 1)), np.eye(3)
+    with pytest.raises(tt.TrackingError, match="H must be 1 x 3"):
         kf.batch_filter([np.array([1.0])])
+    kf = tt.KalmanFilter(dim_x=2, dim_z=2)
+    with pytest.raises(ValueError, match="dim_z"):
+        kf.batch_filter([np.array([1.0, 2.0, 3.0])])
+    with pytest.raises(ValueError, match=r"shape \(T, 2\)"):
+        kf.batch_filter(np.zeros((5, 4)))
     with pytest.raises(ValueError):
         tt.KalmanFilter(dim_x=9, dim_z=2)
 

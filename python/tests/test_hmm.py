@@ -121,7 +121,7 @@ def test_sparse_transitions_stay_sparse_and_equal_dense():
     b = rng.dirichlet(np.ones(5), size=n)
     pi = np.full(n, 1 / n)
     obs = rng.integers(0, 5, 400)
-    dense = tt.CategoricalHMM(n_components=n, init_params="", n_iter=5, tol=0.0)
+    dense = tt.CategoricalHMM(n_components=n, init_params="", n_iter=5, tol=0.0, transmat_storage="dense")
     sparse = tt.CategoricalHMM(n_components=n, init_params="", n_iter=5, tol=0.0)
     dense.startprob_, dense.transmat_, dense.emissionprob_ = pi, a, b
     sparse.startprob_, sparse.transmat_, sparse.emissionprob_ = pi, sp.csr_array(a), b
@@ -133,10 +133,15 @@ def test_sparse_transitions_stay_sparse_and_equal_dense():
     np.testing.assert_allclose(sparse.emissionprob_, dense.emissionprob_, atol=1e-12)
     # hmmlearn on the same dense model: the same re-estimation.
     theirs = hl.CategoricalHMM(n_components=n, init_params="", n_iter=5, tol=-np.inf)
+    minus_inf = tt.CategoricalHMM(n_components=n, init_params="", n_iter=5, tol=-np.inf)
+    minus_inf.startprob_, minus_inf.transmat_, minus_inf.emissionprob_ = pi, a, b
+    minus_inf.fit(obs)
+    assert minus_inf.monitor_.iter == 5
     theirs.startprob_, theirs.transmat_, theirs.emissionprob_ = pi, a, b
     theirs.n_features = 5
     theirs.fit(obs.reshape(-1, 1))
     np.testing.assert_allclose(dense.transmat_, theirs.transmat_, atol=1e-9)
+    np.testing.assert_allclose(minus_inf.transmat_, theirs.transmat_, atol=1e-9)
 
 
 def test_bad_input_raises():
@@ -160,3 +165,13 @@ def test_bad_input_raises():
         tt.CategoricalHMM(n_components=3).score(X)
     with pytest.raises(tt.TrackingError, match="prior"):
         model(transmat_prior=0.5, init_params="").fit(X)
+    with pytest.raises(tt.TrackingError, match="overflow"):
+        m.score(X, lengths=[2**64 - 2048, 2048 + len(X)])
+    with pytest.raises(ValueError, match="lengths"):
+        m.score(X, lengths=[-1, len(X) + 1])
+    # A CSR matrix whose indptr falls (scipy's own checks may not run first): refused, no
+    # panic.
+    csr = sp.csr_array(A)
+    for indptr in ([0, 5, 2, 7], [1, 2, 4, 7]):
+        with pytest.raises(tt.TrackingError, match="CSR"):
+            tt._native.Hmm.sparse(PI, indptr, csr.indices, csr.data, B)

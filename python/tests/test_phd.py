@@ -119,3 +119,9 @@ def test_online_mcmcda_is_reproducible_and_checks_its_settings():
         tt.OnlineMcmcdaTracker(model=dict(p_detect=2.0))
     with pytest.raises(ValueError, match="shape"):
         tt.OnlineMcmcdaTracker().update(np.zeros((3, 6)))
+    # A bad point is refused before anything is stored: the tracker goes on afterwards.
+    tracker = tt.OnlineMcmcdaTracker(seed=5, model=MODEL, samples_per_scan=200)
+    tracker.update(two_walkers(1)[0])
+    with pytest.raises(tt.TrackingError, match="not finite"):
+        tracker.update(np.array([[1.0, np.nan]]))
+    assert tracker.update(two_walkers(2)[1]).shape[1] == 3 and tracker.frame_count == 2

@@ -109,6 +109,8 @@ def test_bad_input_raises():
         sort.update(np.zeros((2, 5)))
     with pytest.raises(ValueError, match="2-D"):
         sort.update(np.zeros(6))
+    with pytest.raises(ValueError, match="2-D"):
+        sort.update([0, 0, 10, 10, 0.9, 0])
     with pytest.raises(TypeError, match="numeric"):
         sort.update(np.array([["a"] * 6]))
     with pytest.raises(tt.TrackingError, match="not finite"):

@@ -95,7 +95,13 @@ def evaluate(
     DetRe, DetPr, AssRe, AssPr, MOTA, MOTP, MODA, CLR_Re, CLR_Pr, CLR_TP, CLR_FN, CLR_FP,
     IDSW, MT, PT, ML, Frag, IDF1, IDR, IDP, IDTP, IDFN, IDFP), SR and FAF (Yoon et al.
     2016), with ``ospa_cutoff`` (or ``distance``) the mean OSPA and GOSPA (p = 2) over the
-    frames on box centres, and ``notes`` (a skipped header, an empty output)."""
+    frames on box centres, and ``notes`` (a skipped header, an empty output).
+
+    The CLEAR counts (and so MOTA) come from TrackEval's frame-by-frame matching, which
+    favours the previous frame's pairs; py-motmetrics keeps an object's last match from any
+    earlier frame, so its switch count can differ by a few when a false box competes after a
+    miss (equal on the bundled sequences; docs/benchmarks.md). ``motp`` is NaN without a
+    match, as py-motmetrics gives it."""
 
 class Hmm:
     """A checked categorical HMM (pi, A, B)."""

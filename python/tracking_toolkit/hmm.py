@@ -3,7 +3,10 @@
 Fitted with the same settings and ``random_state`` as ``hmmlearn.hmm.CategoricalHMM``
 (0.3.3), it starts from the same parameters, runs the same Baum-Welch iterations and stops
 at the same one, so ``startprob_``, ``transmat_`` and ``emissionprob_`` agree with
-hmmlearn's to rounding. Unlike hmmlearn, ``transmat_`` may be a ``scipy.sparse`` matrix:
+hmmlearn's to rounding. Two cases part from hmmlearn: a fit whose log-likelihood falls by
+more than ``tol`` (EM never does without priors above 1) stops there in hmmlearn and goes
+on here, and with ``startprob_prior`` above 1 a zero start probability gets the prior's
+count here but stays zero in hmmlearn. Unlike hmmlearn, ``transmat_`` may be a ``scipy.sparse`` matrix:
 it stays sparse, and every algorithm then costs O(T · nnz(A)) instead of O(T · N²).
 """
 
@@ -188,8 +191,11 @@ class CategoricalHMM:
         self._init(X)
         sparse = _issparse(self.transmat_)
         priors = (self.startprob_prior, self.transmat_prior, self.emissionprob_prior)
+        # hmmlearn stops when the gain falls below tol; with tol <= 0 (-inf included) that
+        # is never under EM, which our tolerance 0 gives too.
+        tol = max(float(self.tol), 0.0)
         model, history, converged = self._model().fit(
-            X, lengths, self.n_iter, self.tol, self.params, priors
+            X, lengths, self.n_iter, tol, self.params, priors
         )
         steps = len(history) - 1
         if converged and steps < self.n_iter:
