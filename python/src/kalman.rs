@@ -105,8 +105,20 @@ fn rts_of<const N: usize>(f: &Table, q: &Table, means: &Table, covs: &Table) -> 
     Ok(flatten(&smoothed, 0.0))
 }
 
-/// Calls `$call::<N, M>(args)` for the runtime sizes `$n` and `$m` (checked by [`sizes`]).
+/// Calls `$call::<N, M>(args)` for the runtime sizes `$n` and `$m`, or `$call::<N>(args)`
+/// for `state $n` (checked by [`sizes`]).
 macro_rules! by_size {
+    (state $n:expr, $call:ident, $args:tt) => {
+        match $n {
+            1 => $call::<1> $args,
+            2 => $call::<2> $args,
+            3 => $call::<3> $args,
+            4 => $call::<4> $args,
+            5 => $call::<5> $args,
+            6 => $call::<6> $args,
+            _ => unreachable!("sizes are checked first"),
+        }
+    };
     ($n:expr, $m:expr, $call:ident, $args:tt) => {
         by_size!(@n $n, $m, $call, $args, 1 2 3 4 5 6)
     };
@@ -132,15 +144,6 @@ fn sizes(n: usize, m: usize) -> PyResult<()> {
         )));
     }
     Ok(())
-}
-
-fn rts_only<const N: usize, const M: usize>(
-    f: &Table,
-    q: &Table,
-    means: &Table,
-    covs: &Table,
-) -> PyResult<Run> {
-    rts_of::<N>(f, q, means, covs)
 }
 
 fn out<'py>(py: Python<'py>, n: usize, run: Run) -> PyResult<KalmanOut<'py>> {
@@ -220,6 +223,6 @@ pub fn rts_smooth<'py>(
             means.rows, covs.rows
         )));
     }
-    let run = py.detach(|| by_size!(n, 1, rts_only, (&f, &q, &means, &covs)))?;
+    let run = py.detach(|| by_size!(state n, rts_of, (&f, &q, &means, &covs)))?;
     out(py, n, run)
 }

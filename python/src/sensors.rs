@@ -7,7 +7,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use sensors_audio::{Beamform, BeamformConfig, MicArray, PeakSearch, Recording};
-use sensors_video::{BackgroundModel, ForegroundMask, MogConfig, PixelFormat, VideoFrame};
+use sensors_video::{BackgroundModel, MogConfig, PixelFormat, VideoFrame};
 
 use crate::arrays::{table, to_numpy};
 use crate::errors::IntoPy;
@@ -22,7 +22,6 @@ const MAX_SIDE: usize = 1 << 16;
 pub struct BackgroundSubtractor {
     config: MogConfig,
     model: Option<BackgroundModel>,
-    mask: Option<ForegroundMask>,
 }
 
 /// A uint8 image (H, W) or (H, W, 3) as a frame.
@@ -59,7 +58,6 @@ impl BackgroundSubtractor {
         Ok(Self {
             config,
             model: None,
-            mask: None,
         })
     }
 
@@ -84,13 +82,9 @@ impl BackgroundSubtractor {
                     .or_raise()?,
             ),
         };
-        let mask = self.mask.get_or_insert_with(|| ForegroundMask {
-            width: frame.width(),
-            height: frame.height(),
-            labels: vec![0; frame.width() * frame.height()],
-        });
-        py.detach(|| model.apply_into(&frame, mask)).or_raise()?;
-        let array = Array2::from_shape_vec((mask.height, mask.width), mask.labels.clone())
+        // A fresh mask each frame: numpy takes its labels without a copy.
+        let mask = py.detach(|| model.apply(&frame)).or_raise()?;
+        let array = Array2::from_shape_vec((mask.height, mask.width), mask.labels)
             .map_err(|e| PyValueError::new_err(e.to_string()))?;
         Ok(array.into_pyarray(py))
     }
@@ -136,6 +130,19 @@ fn recording(
     ))
 }
 
+/// Every frame's beamform of the recording (`signals`, `mics`) under `config`, the GIL
+/// released.
+fn beamform_frames(
+    py: Python<'_>,
+    signals: &Bound<'_, PyAny>,
+    mics: &Bound<'_, PyAny>,
+    config: &BeamformConfig,
+) -> PyResult<Vec<Beamform>> {
+    let (rec, array) = recording(signals, mics, config.sample_rate_hz)?;
+    py.detach(|| config.check(&array)?.beamform(&rec))
+        .or_raise()
+}
+
 /// Beamforms a recording frame by frame: (frame centre times, s (F,), energies (F, B)); beam
 /// b is steered to b · 2π / B in the array frame.
 #[pyfunction]
@@ -147,10 +154,7 @@ pub fn beamform<'py>(
     params: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Pair<'py, PyArray2<f64>>> {
     let config: BeamformConfig = settings(params)?;
-    let (rec, array) = recording(signals, mics, config.sample_rate_hz)?;
-    let frames = py
-        .detach(|| config.check(&array)?.beamform(&rec))
-        .or_raise()?;
+    let frames = beamform_frames(py, signals, mics, &config)?;
     let times: Vec<f64> = frames.iter().map(|f| f.time_s).collect();
     let energies = frames.into_iter().flat_map(|f| f.energies).collect();
     Ok((
@@ -178,10 +182,7 @@ pub fn doa<'py>(
             "min_relative = {min_relative}; it must be within [0, 1]"
         )));
     }
-    let (rec, array) = recording(signals, mics, config.sample_rate_hz)?;
-    let frames = py
-        .detach(|| config.check(&array)?.beamform(&rec))
-        .or_raise()?;
+    let frames = beamform_frames(py, signals, mics, &config)?;
     let mut total = Beamform {
         time_s: 0.0,
         energies: vec![0.0; config.n_beams],
